@@ -1,0 +1,1 @@
+"""Benchmarks behind `tools/bench_*.py` and `main-bench bench`: each module has `run(quick) -> dict`."""

@@ -1,0 +1,61 @@
+"""`main-bench evaluate check-agent SPEC`: conformance check of a submission.
+
+Exit code 0 when every check passes, 1 when one fails (the report says which), 2 for a spec that cannot be
+parsed or a bad option.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import typer
+
+from .common import JsonOption, emit
+
+
+def register(app: typer.Typer) -> None:
+    """Add `check-agent` to the `evaluate` group."""
+    app.command("check-agent")(check_agent)
+
+
+def check_agent(
+    spec: str = typer.Argument(..., help="The submission: package.module:attr, file.py[:attr], a directory "
+                               "with policy.py, or baseline:comm."),
+    agents: int = typer.Option(2, "--agents", help="Team size."),
+    task: str = typer.Option("shared", "--task", help="Sub-task: shared or individual."),
+    track: str = typer.Option("egocentric", "--track", help="Track: egocentric or gps."),
+    goal: str = typer.Option("object", "--goal", help="Goal kind: object (category id) or point."),
+    steps: int = typer.Option(20, "--steps", help="Steps per check episode (the last agent is done halfway)."),
+    seed: int = typer.Option(0, "--seed", help="Seed given to the policy and to the synthetic observations."),
+    step_seconds: float = typer.Option(10.0, "--step-seconds", help="Time limit per act call."),
+    memory_mb: int = typer.Option(4096, "--memory-mb", help="Address-space limit of the policy process (MB)."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Check that a submission loads, follows the team policy protocol, answers with valid actions for exactly
+    the acting agents, is deterministic for a seed and stays within the time limit, in its own process."""
+    from ..evaluation.check import CheckSettings, check_policy
+    from ..evaluation.isolation import Limits
+    from ..evaluation.submission import parse_spec
+
+    policy_spec = parse_spec(spec)
+    limits = Limits(step_seconds=step_seconds, memory_mb=memory_mb)
+    settings = CheckSettings(agents=agents, task=task, track=track, goal=goal, steps=steps, seed=seed,  # type: ignore[arg-type]
+                             limits=limits)
+    report = check_policy(policy_spec, settings)
+    payload = report.to_dict()
+    payload["spec"] = spec
+    emit("evaluate check-agent", payload, as_json, _render)
+    if not report.passed:
+        raise typer.Exit(1)
+
+
+def _render(d: dict[str, Any]) -> str:
+    s = d["settings"]
+    lines = [f"check-agent {d['spec']}  ({s['agents']} agents, {s['task']} target, {s['track']} track, "
+             f"{s['goal']} goals, {s['steps']} steps, seed {s['seed']})"]
+    for c in d["checks"]:
+        lines.append(f"  {c['status'].upper():<5} {c['name']:<14} {c['message']}")
+    failed = [c["name"] for c in d["checks"] if c["status"] == "fail"]
+    lines.append(f"{len(failed)} of {len(d['checks'])} checks failed: {', '.join(failed)}" if failed
+                 else "all checks passed")
+    return "\n".join(lines)

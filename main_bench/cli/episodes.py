@@ -1,0 +1,157 @@
+"""`main-bench episodes`: generate, validate, export and import episode data sets."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ..errors import InputError
+from .common import JsonOption, emit, parse_int_list, progress
+
+app = typer.Typer(help="Generate, validate, export and import episode data sets.", no_args_is_help=True)
+
+
+@app.callback()
+def _group() -> None:
+    """Generate, validate, export and import episode data sets."""
+
+
+def _tasks(task: str) -> tuple[str, ...]:
+    if task == "both":
+        return ("shared", "individual")
+    if task in ("shared", "individual"):
+        return (task,)
+    raise InputError(f"--task must be shared, individual or both, got {task!r}")
+
+
+@app.command("generate")
+def generate(
+    scenes: list[str] = typer.Option(..., "--scenes", help="`builtin`, a folder of scene files, or scene files "
+                                                           "(repeat --scenes for several)."),
+    out: Path = typer.Option(..., "--out", help="Data set folder to write (hive-partitioned Parquet + manifest)."),
+    splits: Path | None = typer.Option(None, "--splits", help="Scene-level split file (e.g. "
+                                                             "episodes/splits/builtin.json)."),
+    split: str = typer.Option("val", "--split", help="Split of all scenes when no --splits file is given."),
+    only: str | None = typer.Option(None, "--only-splits", help="Keep these splits only, e.g. val,test."),
+    task: str = typer.Option("both", "--task", help="shared, individual or both."),
+    agents: str = typer.Option("2,3", "--agents", help="Agent counts, e.g. 2,3,4 (1 to 8)."),
+    per_scene: int = typer.Option(100, "--per-scene", help="Episodes per (scene, task, agent count)."),
+    min_distance: float = typer.Option(2.0, "--min-distance", help="Least start-to-target geodesic (m)."),
+    max_distance: float = typer.Option(20.0, "--max-distance", help="Largest start-to-target geodesic (m)."),
+    success_distance: float = typer.Option(1.0, "--success-distance", help="Success distance recorded (m)."),
+    goal_radius: float = typer.Option(0.5, "--goal-radius", help="Goal points: cells this close to an object (m)."),
+    start_margin: float = typer.Option(0.1, "--start-margin", help="Starts at least 2 x radius + this apart (m)."),
+    cross_floor: bool = typer.Option(False, "--cross-floor", help="Allow starts on another floor than the target."),
+    ratio_threshold: float = typer.Option(1.1, "--ratio-threshold",
+                                          help="Thin episodes with geodesic/Euclidean below this (0: off)."),
+    min_island_area: float = typer.Option(2.0, "--min-island-area", help="Skip targets on smaller islands (m^2)."),
+    max_rounds: int = typer.Option(8, "--max-rounds", help="Sampling rounds per shard before giving up."),
+    shard_size: int = typer.Option(50_000, "--shard-size", help="Most episodes per shard file."),
+    seed: int = typer.Option(0, "--seed", help="Seed of all randomness."),
+    workers: int = typer.Option(1, "--workers", help="Local worker processes."),
+    executor: str = typer.Option("local", "--executor", help="local or ray."),
+    ray_address: str | None = typer.Option(None, "--ray-address", help="Ray cluster address (default: local)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing data set at --out."),
+    cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache of built-in houses and navmeshes."),
+    up: str = typer.Option("auto", "--up", help="Up axis of scene files: y, z or auto."),
+    agent_radius: float = typer.Option(0.18, "--agent-radius", help="Navmesh agent radius (m)."),
+    agent_height: float = typer.Option(1.5, "--agent-height", help="Navmesh agent height (m)."),
+    max_climb: float = typer.Option(0.2, "--max-climb", help="Navmesh max step height (m)."),
+    max_slope: float = typer.Option(45.0, "--max-slope", help="Navmesh max slope (degrees)."),
+    cell_size: float = typer.Option(0.05, "--cell-size", help="Navmesh cell size (m)."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Sample shared/individual-target multi-agent episodes into a Parquet data set (resumable)."""
+    from ..episodes.generate import generate_dataset
+    from ..episodes.settings import GenerationSettings
+    from ..episodes.sources import resolve_sources
+    from ..navmesh import NavMeshSettings
+
+    if up not in ("y", "z", "auto"):
+        raise InputError(f"--up must be y, z or auto, got {up!r}")
+    settings = GenerationSettings(
+        tasks=_tasks(task), agents=parse_int_list(agents, "--agents", 1, 8), per_scene=per_scene,
+        min_distance=min_distance, max_distance=max_distance, success_distance=success_distance,
+        goal_radius=goal_radius, start_margin=start_margin, cross_floor=cross_floor,
+        ratio_threshold=ratio_threshold, min_island_area=min_island_area, max_rounds=max_rounds,
+        shard_size=shard_size, seed=seed)
+    nav = NavMeshSettings(agent_radius=agent_radius, agent_height=agent_height, max_climb=max_climb,
+                          max_slope=max_slope, cell_size=cell_size)
+    only_splits = tuple(s.strip() for s in only.split(",") if s.strip()) if only else None
+    sources = resolve_sources(scenes, splits_file=splits, split=split, only_splits=only_splits,
+                              cache_dir=cache_dir, up=up)
+    nav_cache = cache_dir / "navmesh" if cache_dir is not None else _default_navmesh_cache()
+    total = settings.per_scene * len(sources) * len(settings.tasks) * len(settings.agents)
+    with progress("episodes", total, enabled=not (quiet or as_json)) as advance:
+        report = generate_dataset(settings, sources, out, nav, executor=executor, workers=workers,
+                                  ray_address=ray_address, overwrite=overwrite, cache_dir=nav_cache,
+                                  progress=advance)
+    emit("episodes generate", report.to_json(), as_json, lambda d: report.render())
+
+
+def _default_navmesh_cache() -> Path | None:
+    try:
+        from ..scenes.builtin import default_cache_dir
+    except ImportError:
+        return None
+    return Path(default_cache_dir()) / "navmesh"
+
+
+@app.command("validate")
+def validate(
+    dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
+    recheck: bool = typer.Option(False, "--recheck", help="Recompute geodesic distances from the navmesh."),
+    sample: int | None = typer.Option(None, "--sample", min=1, help="Recheck this many random episodes only."),
+    cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache of built-in houses and navmeshes."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Check a data set (schema, checksums, ids, value ranges; --recheck distances). Exit 0 only if all hold."""
+    from ..episodes.validate import validate_dataset
+
+    nav_cache = cache_dir / "navmesh" if cache_dir is not None else _default_navmesh_cache()
+    report = validate_dataset(dataset, recheck=recheck, sample=sample, cache_dir=nav_cache)
+    emit("episodes validate", report.to_json(), as_json, lambda d: report.render())
+    if not report.ok:
+        raise typer.Exit(1)
+
+
+def _format(fmt: str) -> None:
+    if fmt != "habitat":
+        raise InputError(f"--format must be habitat, got {fmt!r}")
+
+
+@app.command("export")
+def export(
+    dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
+    out: Path = typer.Option(..., "--out", help="Folder for the exported files."),
+    fmt: str = typer.Option("habitat", "--format", help="Export format: habitat (PointNav-v1 json.gz)."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Export to Habitat PointNav-v1 (`<task>_n<N>/<split>/<split>.json.gz`, +Y up, one episode per agent)."""
+    from ..episodes.habitat import export_habitat
+
+    _format(fmt)
+    files = export_habitat(dataset, out)
+    emit("episodes export", {"files": [str(f) for f in files]}, as_json,
+         lambda d: "\n".join(["wrote"] + [f"  {f}" for f in d["files"]]))
+
+
+@app.command("import")
+def import_(
+    src: Path = typer.Argument(..., help="Folder of a Habitat export written by `episodes export`."),
+    out: Path = typer.Option(..., "--out", help="Data set folder to write."),
+    fmt: str = typer.Option("habitat", "--format", help="Import format: habitat."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing data set at --out."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Import a Habitat PointNav-v1 export back into a main-bench data set."""
+    from ..episodes.dataset import read_manifest
+    from ..episodes.habitat import import_habitat
+
+    _format(fmt)
+    path = import_habitat(src, out, overwrite=overwrite)
+    m = read_manifest(path)
+    emit("episodes import", {"out": str(path), "episodes": m.episodes, "manifest_hash": m.manifest_hash},
+         as_json, lambda d: f"imported {d['episodes']} episodes -> {d['out']}")

@@ -1,0 +1,108 @@
+"""`main-bench scenes`: inspect scene files, generate and preview the built-in procedural houses."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from .common import JsonOption, emit
+
+app = typer.Typer(help="Inspect scenes; generate and preview built-in procedural houses.", no_args_is_help=True)
+
+UpOption = typer.Option("auto", "--up", help="Up axis of the file: y, z or auto (glTF is +Y by its spec).")
+ScaleOption = typer.Option(None, "--scale", help="Metres per file unit (default: detect cm/mm from the size).")
+
+
+@app.command("info")
+def info(
+    scene: Path = typer.Argument(..., help="Scene file (.glb, .gltf, .obj, .ply)."),
+    up: str = UpOption,
+    scale: float | None = ScaleOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Triangle count, bounds in the canonical +Z-up frame, up axis, units, content hash and objects."""
+    from ..scenes import load_scene
+
+    loaded = load_scene(scene, up=up, scale=scale)  # type: ignore[arg-type]
+    emit("scenes info", loaded.info(), as_json, _render_info)
+
+
+def _render_info(d: dict) -> str:
+    lines = [
+        f"scene      {d['scene_id']}  ({d['path']})",
+        f"triangles  {d['triangles']:,}",
+        f"bounds     {d['bounds_min']} .. {d['bounds_max']} m (+Z up)",
+        f"size       {d['size'][0]:.2f} x {d['size'][1]:.2f} x {d['size'][2]:.2f} m",
+        f"up axis    +{d['up_axis'].upper()} in the file ({d['up_reason']})",
+        f"units      x{d['scale']} ({d['scale_reason']})",
+        f"hash       {d['content_hash']}",
+        f"objects    {d['object_count']}" + (f" in {len(d['categories'])} categories" if d["categories"] else ""),
+    ]
+    for cat, n in d["categories"].items():
+        lines.append(f"  {cat:<20} {n}")
+    return "\n".join(lines)
+
+
+@app.command("generate")
+def generate(
+    out: Path = typer.Argument(..., help="Folder to write the houses into (created if missing)."),
+    count: int = typer.Option(1, "--count", "-n", min=1, max=100000, help="Number of houses."),
+    seed: int = typer.Option(0, "--seed", min=0, help="Seed of the first house; the others take seed+1, seed+2, ..."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Write built-in procedural houses: `house_NNNN.glb` (+Y up) and `house_NNNN.objects.json` per seed."""
+    from ..scenes.procedural import GENERATOR_VERSION, generate_house, write_house
+    from .common import progress
+
+    if out.exists() and not out.is_dir():
+        from ..errors import InputError
+
+        raise InputError("exists and is not a folder; give a folder for the houses", path=out)
+    houses = []
+    with progress("houses", count, enabled=not (quiet or as_json)) as advance:
+        for s in range(seed, seed + count):
+            house = generate_house(s)
+            glb = write_house(house, out)
+            houses.append({
+                "scene_id": house.house_id, "seed": s, "path": str(glb), "floors": len(house.floors),
+                "rooms": len(house.rooms), "area_m2": round(house.total_area, 2), "objects": len(house.furniture),
+                "categories": len(house.categories), "triangles": house.triangle_count(),
+            })
+            advance(1)
+    payload = {"out": str(out), "generator_version": GENERATOR_VERSION, "count": count, "houses": houses}
+    emit("scenes generate", payload, as_json, _render_generate)
+
+
+def _render_generate(d: dict) -> str:
+    lines = [f"wrote {d['count']} house(s) to {d['out']} (generator {d['generator_version']})"]
+    for h in d["houses"][:20]:
+        lines.append(f"  {h['scene_id']}  {h['floors']} floor(s), {h['rooms']:2d} rooms, {h['area_m2']:6.1f} m^2, "
+                     f"{h['objects']:3d} objects in {h['categories']} categories")
+    if len(d["houses"]) > 20:
+        lines.append(f"  ... and {len(d['houses']) - 20} more")
+    return "\n".join(lines)
+
+
+@app.command("preview")
+def preview(
+    scene: Path = typer.Argument(..., help="Scene file (.glb, .gltf, .obj, .ply)."),
+    out: Path = typer.Option(..., "--out", "-o", help="PNG file to write."),
+    up: str = UpOption,
+    scale: float | None = ScaleOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Draw a top-down picture: obstacles, rooms by type and objects by category, one panel per floor."""
+    from ..errors import InputError
+    from ..scenes import load_scene
+    from ..scenes.preview import find_levels, render_preview
+
+    if out.suffix.lower() != ".png":
+        raise InputError("the preview is a PNG; give --out a name ending in .png", path=out)
+    loaded = load_scene(scene, up=up, scale=scale)  # type: ignore[arg-type]
+    render_preview(loaded, out)
+    payload = {"scene_id": loaded.scene_id, "out": str(out), "floors": [lv.z for lv in find_levels(loaded)],
+               "objects": len(loaded.objects), "rooms": len(loaded.rooms)}
+    emit("scenes preview", payload, as_json,
+         lambda d: f"wrote {d['out']}: {len(d['floors'])} floor(s), {d['rooms']} rooms, {d['objects']} objects")

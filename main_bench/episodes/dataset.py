@@ -1,0 +1,67 @@
+"""Reading a data set back: its manifest, its episodes (filtered by partition) and its scenes' files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.dataset as pads
+
+from ..errors import DatasetError
+from ..scenes.loader import scene_content_hash
+from .manifest import Manifest, SceneEntry, ShardEntry, read_manifest
+from .schema import PARTITION_SCHEMA, ROW_SCHEMA, Episode
+
+__all__ = ["Manifest", "SceneEntry", "ShardEntry", "load_episodes", "load_table", "read_manifest",
+           "resolve_scene"]
+
+
+def load_table(dataset: str | Path, split: str | None = None, task: str | None = None,
+               agents: int | None = None) -> pa.Table:
+    """The episode rows with partition columns `split`, `task`, `agents`, filtered, sorted by episode_id."""
+    root = Path(dataset)
+    manifest = read_manifest(root)
+    files = [root / s.path for s in manifest.shards
+             if (split is None or s.split == split) and (task is None or s.task == task)
+             and (agents is None or s.agents == agents)]
+    missing = [f for f in files if not f.is_file()]
+    if missing:
+        raise DatasetError(f"shard listed in the manifest is missing: {missing[0]}; regenerate the data set",
+                           path=root)
+    schema = pa.unify_schemas([ROW_SCHEMA, PARTITION_SCHEMA])
+    if not files:
+        return schema.empty_table()
+    part = pads.partitioning(PARTITION_SCHEMA, flavor="hive")
+    ds = pads.dataset([str(f) for f in files], schema=schema, format="parquet", partitioning=part,
+                      partition_base_dir=str(root))
+    table = ds.to_table()
+    return table.sort_by("episode_id")
+
+
+def load_episodes(dataset: str | Path, split: str | None = None, task: str | None = None,
+                  agents: int | None = None) -> list[Episode]:
+    """The data set's episodes (optionally one split / task / agent count), sorted by episode_id."""
+    return [Episode.from_row(r) for r in load_table(dataset, split, task, agents).to_pylist()]
+
+
+def resolve_scene(manifest: Manifest, scene_id: str, cache_dir: str | Path | None = None) -> Path:
+    """The scene file of `scene_id`: a built-in house generated into `cache_dir` (default cache), or the
+    recorded path, checked against the recorded content hash."""
+    entry = manifest.scenes.get(scene_id)
+    if entry is None:
+        raise DatasetError(f"scene {scene_id!r} is not in this data set", path=manifest.root)
+    if entry.source == "builtin":
+        from ..scenes import builtin
+
+        cache = Path(cache_dir) if cache_dir is not None else builtin.default_cache_dir()
+        path = Path(builtin.ensure_builtin_scenes([scene_id], cache)[scene_id])
+    else:
+        path = Path(entry.path or "")
+        if not path.is_file():
+            raise DatasetError(f"scene file of {scene_id!r} not found at {path}; put it back there",
+                               path=manifest.root)
+    found = scene_content_hash(path)
+    if found != entry.hash:
+        raise DatasetError(f"scene {scene_id!r} at {path} differs from the one the data set was made from "
+                           f"(hash {found[:12]} != {entry.hash[:12]})", path=manifest.root)
+    return path

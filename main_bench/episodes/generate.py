@@ -1,0 +1,195 @@
+"""Generating a data set: plan shards, run work units (in-process, a process pool, or Ray), write the manifest.
+
+Resumable: every shard is written atomically and carries its own report, so a rerun with the same parameters
+skips finished shards and writes only the missing ones; the manifest is written last. A folder holding a data
+set made with other parameters is refused unless `overwrite`.
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+from ..errors import DatasetError, InputError
+from ..io import atomic_write_json, read_json, sha256_file
+from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, identity
+from .plan import Shard, group_units, plan_shards
+from .settings import GenerationSettings
+from .sources import SceneSource
+
+Executor = Literal["local", "ray"]
+
+
+@dataclass(frozen=True)
+class GenerationReport:
+    """What a generation run did: counts, shortfalls (per shard, with reasons) and the manifest's hash."""
+
+    out: Path
+    requested: int
+    produced: int
+    shards: int
+    shards_written: int
+    shards_reused: int
+    shortfalls: tuple[dict[str, Any], ...]
+    episodes_per_scene: dict[str, int]
+    seconds: float
+    manifest_hash: str
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        out = asdict(self)
+        out["out"] = str(self.out)
+        out["shortfalls"] = list(self.shortfalls)
+        return out
+
+    def render(self) -> str:
+        """Human-readable summary, one line per shortfall."""
+        lines = [f"{self.produced} of {self.requested} episodes in {self.shards} shards "
+                 f"({self.shards_written} written, {self.shards_reused} reused) -> {self.out} "
+                 f"[{self.seconds:.1f} s]"]
+        for s in self.shortfalls:
+            lines.append(f"  shortfall {s['split']}/{s['scene_id']} {s['task']} N={s['agents']} "
+                         f"shard {s['shard']}: {s['reason']}")
+        return "\n".join(lines)
+
+
+def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
+    """Run one work unit (one scene's shards); returns one entry per shard. Top level so pools can pickle it."""
+    from .shards import shard_report
+
+    out = Path(spec["out"])
+    shards = [Shard(**s) for s in spec["shards"]]
+    todo = [s for s in shards if not (out / s.rel_path).is_file()]
+    made: dict[str, dict] = {}
+    if todo:
+        made = _sample_shards(spec, todo)
+    entries = []
+    for s in shards:
+        path = out / s.rel_path
+        if s.rel_path in made:
+            rows, report, written = made[s.rel_path]["rows"], made[s.rel_path], True
+        else:
+            rows, report = shard_report(path)
+            written = False
+        entries.append({"path": s.rel_path, "split": s.split, "scene_id": s.scene_id, "task": s.task,
+                        "agents": s.agents, "shard": s.shard, "requested": s.count, "rows": rows,
+                        "sha256": sha256_file(path), "reason": report.get("reason", ""),
+                        "rejections": report.get("rejections", {}), "written": written})
+    return entries
+
+
+def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
+    from ..navmesh import NavMesh, NavMeshSettings
+    from ..scenes import load_scene
+    from .sampler import sample_episodes
+    from .shards import batch_table, write_shard
+    from .targets import TargetBank
+
+    settings = GenerationSettings.from_json(spec["settings"])
+    nav_settings = NavMeshSettings.from_json(spec["navmesh_settings"])
+    scene = load_scene(spec["scene_path"], up=spec["up"])
+    if scene.content_hash != spec["scene_hash"]:
+        raise DatasetError(f"scene {spec['scene_id']!r} changed since generation started (content hash "
+                           f"{scene.content_hash[:12]} != {spec['scene_hash'][:12]}); start again with --overwrite",
+                           path=spec["scene_path"])
+    if spec.get("cache_dir"):
+        navmesh = NavMesh.build_cached(scene, nav_settings, Path(spec["cache_dir"]))
+    else:
+        navmesh = NavMesh.build(scene, nav_settings)
+    bank = TargetBank(scene, navmesh, settings)
+    separation = settings.separation(nav_settings.agent_radius)
+    made = {}
+    for s in todo:
+        batch, report = sample_episodes(bank, settings, s.task, s.agents, s.count, s.rng(settings.seed),
+                                        separation)
+        table = batch_table(batch, s.scene_id, spec["scene_hash"], s.task, s.first_index)
+        doc = report.to_json()
+        write_shard(table, Path(spec["out"]) / s.rel_path, doc)
+        made[s.rel_path] = {**doc, "rows": len(batch)}
+    return made
+
+
+def _prepare_out(out: Path, ident: dict, overwrite: bool) -> None:
+    """Create `out`, or accept it for resuming, or clear it (overwrite), or refuse it."""
+    if out.exists() and not out.is_dir():
+        raise InputError("--out must be a folder, this is a file", path=out)
+    if not out.exists() or not any(out.iterdir()):
+        return
+    existing = None
+    for name in (MANIFEST_NAME, LOCK_NAME):
+        if (out / name).is_file():
+            doc = read_json(out / name, what="episode data set manifest")
+            existing = {k: doc.get(k) for k in ident}
+            break
+    if existing is None:
+        raise InputError("exists and is not a main-bench episode data set; choose a new or empty --out folder",
+                         path=out)
+    if overwrite:
+        for child in out.iterdir():
+            if child.name.startswith("split=") and child.is_dir():
+                shutil.rmtree(child)
+        for name in (MANIFEST_NAME, LOCK_NAME):
+            (out / name).unlink(missing_ok=True)
+        return
+    if existing != ident:
+        diff = sorted(_diff(existing, ident))
+        raise InputError(f"holds a data set generated with different parameters ({', '.join(diff[:6])} differ); "
+                         "pass --overwrite to replace it, or choose another --out", path=out)
+    for stale in out.glob("split=*/task=*/agents=*/.part-*"):
+        stale.unlink()  # temporary files of a killed run
+
+
+def _diff(a: Any, b: Any, prefix: str = "") -> list[str]:
+    if isinstance(a, dict) and isinstance(b, dict):
+        out = []
+        for k in sorted(set(a) | set(b)):
+            out += _diff(a.get(k), b.get(k), f"{prefix}{k}.")
+        return out
+    return [] if a == b else [prefix.rstrip(".") or "value"]
+
+
+def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], out: str | Path,
+                     navmesh_settings: Any, *, executor: Executor = "local", workers: int = 1,
+                     ray_address: str | None = None, overwrite: bool = False, cache_dir: str | Path | None = None,
+                     progress: Callable[[int], None] | None = None) -> GenerationReport:
+    """Generate (or finish) the data set at `out` for `sources`; returns the run's report.
+
+    `navmesh_settings`: a `NavMeshSettings` (or its JSON dict). `cache_dir`: where built navmeshes are cached
+    (None: built in every work unit). `progress(n)` is called with each finished unit's episode count.
+    """
+    started = time.perf_counter()
+    out = Path(out)
+    if workers < 1:
+        raise InputError(f"--workers must be at least 1, got {workers}")
+    if executor not in ("local", "ray"):
+        raise InputError(f"unknown executor {executor!r}; use local or ray")
+    nav_json = navmesh_settings if isinstance(navmesh_settings, dict) else navmesh_settings.to_json()
+    scenes = {s.scene_id: s.to_json() for s in sources}
+    ident = identity(settings, nav_json, scenes)
+    _prepare_out(out, ident, overwrite)
+    out.mkdir(parents=True, exist_ok=True)
+    if not (out / LOCK_NAME).is_file() or overwrite:
+        atomic_write_json(out / LOCK_NAME, ident)
+    by_id = {s.scene_id: s for s in sources}
+    shards = plan_shards([(s.scene_id, s.split) for s in sources], settings)
+    specs = [{"out": str(out), "scene_id": unit[0].scene_id, "scene_path": str(by_id[unit[0].scene_id].path),
+              "scene_hash": by_id[unit[0].scene_id].content_hash, "up": by_id[unit[0].scene_id].up,
+              "settings": settings.to_json(), "navmesh_settings": nav_json,
+              "cache_dir": None if cache_dir is None else str(cache_dir),
+              "shards": [asdict(s) for s in unit]} for unit in group_units(shards)]
+    from .executors import run_units
+
+    entries = run_units(run_unit, specs, executor=executor, workers=workers, ray_address=ray_address,
+                        progress=progress)
+    doc = build_manifest(ident, entries)
+    atomic_write_json(out / MANIFEST_NAME, doc)
+    (out / LOCK_NAME).unlink(missing_ok=True)
+    return GenerationReport(
+        out=out, requested=sum(s.count for s in shards), produced=doc["episodes"], shards=len(shards),
+        shards_written=sum(e["written"] for e in entries), shards_reused=sum(not e["written"] for e in entries),
+        shortfalls=tuple(doc["shortfalls"]), episodes_per_scene=doc["episodes_per_scene"],
+        seconds=time.perf_counter() - started, manifest_hash=sha256_file(out / MANIFEST_NAME))

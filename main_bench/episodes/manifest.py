@@ -1,0 +1,137 @@
+"""`manifest.json`: what a data set is (every parameter, the seed, scenes, shards, checksums, shortfalls).
+
+It holds no timestamp or machine detail, so two runs with the same inputs write the same manifest bytes and
+`manifest_hash` identifies the data.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .. import __version__
+from ..errors import DatasetError, InputError
+from ..io import check_schema_version, read_json, sha256_file
+from .schema import EPISODES_SCHEMA_VERSION
+from .settings import GenerationSettings
+
+MANIFEST_NAME = "manifest.json"
+LOCK_NAME = ".generation.json"
+
+
+@dataclass(frozen=True)
+class SceneEntry:
+    """A data set's scene: split, content hash, source ("builtin" or "path"), file path for "path", up axis."""
+
+    scene_id: str
+    split: str
+    hash: str
+    source: str
+    path: str | None = None
+    up: str = "auto"
+
+
+@dataclass(frozen=True)
+class ShardEntry:
+    """One shard file: where it is (relative path), what it holds, and its checksum."""
+
+    path: str
+    split: str
+    scene_id: str
+    task: str
+    agents: int
+    shard: int
+    requested: int
+    rows: int
+    sha256: str
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """A data set's manifest as read back; `manifest_hash` is the SHA-256 of manifest.json's bytes."""
+
+    root: Path
+    schema_version: int
+    toolkit_version: str
+    settings: GenerationSettings
+    navmesh_settings: dict[str, Any]
+    seed: int
+    scenes: dict[str, SceneEntry]
+    shards: tuple[ShardEntry, ...]
+    shortfalls: tuple[dict[str, Any], ...]
+    manifest_hash: str
+
+    @property
+    def goal_radius(self) -> float:
+        """Goal radius of object targets (metres)."""
+        return self.settings.goal_radius
+
+    @property
+    def success_distance(self) -> float:
+        """Success distance the data set was made for (metres)."""
+        return self.settings.success_distance
+
+    def navmesh(self) -> Any:
+        """The navmesh settings as a `NavMeshSettings`."""
+        from ..navmesh import NavMeshSettings
+
+        return NavMeshSettings.from_json(self.navmesh_settings)
+
+    @property
+    def episodes(self) -> int:
+        """Total number of episodes."""
+        return sum(s.rows for s in self.shards)
+
+
+def identity(settings: GenerationSettings, navmesh_settings: dict[str, Any], scenes: dict[str, dict]) -> dict:
+    """What must match for an existing (partial) data set to be resumed rather than refused."""
+    return {"schema_version": EPISODES_SCHEMA_VERSION, "settings": settings.to_json(),
+            "navmesh_settings": navmesh_settings, "scenes": scenes}
+
+
+def build_manifest(ident: dict, shards: list[dict]) -> dict:
+    """The manifest document from the run identity and the finished shards' entries."""
+    shards = sorted(shards, key=lambda s: s["path"])
+    shortfalls = [
+        {k: s[k] for k in ("split", "scene_id", "task", "agents", "shard", "requested", "rows")}
+        | {"reason": s.get("reason", ""), "rejections": s.get("rejections", {})}
+        for s in shards if s["rows"] < s["requested"]
+    ]
+    per_scene: dict[str, int] = {}
+    for s in shards:
+        per_scene[s["scene_id"]] = per_scene.get(s["scene_id"], 0) + s["rows"]
+    return {
+        **ident,
+        "toolkit_version": __version__,
+        "seed": ident["settings"]["seed"],
+        "episodes": sum(s["rows"] for s in shards),
+        "episodes_per_scene": dict(sorted(per_scene.items())),
+        "shards": [{k: s[k] for k in ShardEntry.__dataclass_fields__} for s in shards],
+        "shortfalls": shortfalls,
+    }
+
+
+def read_manifest(path: str | Path) -> Manifest:
+    """Read `DATASET/manifest.json` (or the file itself); refuses a missing, malformed or newer manifest."""
+    path = Path(path)
+    file = path / MANIFEST_NAME if path.is_dir() else path
+    if path.is_dir() and not file.is_file():
+        raise DatasetError("no manifest.json: not a main-bench episode data set, or its generation did not "
+                           "finish (run `main-bench episodes generate` again with the same options)", path=path)
+    doc = read_json(file, what="episode data set manifest")
+    check_schema_version(doc, EPISODES_SCHEMA_VERSION, file, "episode data set manifest")
+    try:
+        settings = GenerationSettings.from_json(doc["settings"])
+        scenes = {sid: SceneEntry(scene_id=sid, split=e["split"], hash=e["hash"], source=e["source"],
+                                  path=e.get("path"), up=e.get("up", "auto"))
+                  for sid, e in doc["scenes"].items()}
+        shards = tuple(ShardEntry(**s) for s in doc["shards"])
+        return Manifest(root=file.parent, schema_version=int(doc["schema_version"]),
+                        toolkit_version=str(doc.get("toolkit_version", "")), settings=settings,
+                        navmesh_settings=dict(doc["navmesh_settings"]), seed=int(doc["seed"]), scenes=scenes,
+                        shards=shards, shortfalls=tuple(doc.get("shortfalls", ())),
+                        manifest_hash=sha256_file(file))
+    except (KeyError, TypeError, ValueError, InputError) as exc:
+        raise DatasetError(f"malformed manifest ({type(exc).__name__}: {exc}); regenerate the data set",
+                           path=file) from None

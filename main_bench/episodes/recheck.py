@@ -1,0 +1,71 @@
+"""`validate --recheck`: recompute stored geodesic distances from the navmesh and the goal definition."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pyarrow as pa
+
+from .goals import target_field
+from .plan import stable_id
+
+if TYPE_CHECKING:
+    from .manifest import Manifest, ShardEntry
+    from .validate import ValidationReport
+
+
+def _pick(total: int, sample: int | None, seed: int) -> np.ndarray:
+    if sample is None or sample >= total:
+        return np.arange(total)
+    rng = np.random.default_rng(np.random.SeedSequence(entropy=seed, spawn_key=(stable_id("recheck"),)))
+    return np.sort(rng.choice(total, size=sample, replace=False))
+
+
+def recheck_distances(manifest: Manifest, tables: list[tuple[ShardEntry, pa.Table]], report: ValidationReport,
+                      *, sample: int | None = None, cache_dir: str | Path | None = None) -> None:
+    """Recompute the geodesic distance of every agent of every (or `sample` random) episode; add problems
+    where |recomputed - stored| > 1% + 1 cm. Fields are built once per (scene, target)."""
+    from ..navmesh import NavMesh
+    from ..scenes import load_scene
+    from .dataset import resolve_scene
+    from .validate import RECHECK_ABS, RECHECK_REL
+
+    rows = []  # (scene_id, shard, episode_id, start (N,3), instance ids (N,), target pos (N,3), geo (N,))
+    for entry, table in tables:
+        for r in table.select(["episode_id", "start_positions", "target_instance_ids", "target_positions",
+                               "geodesic_distances"]).to_pylist():
+            rows.append((entry.scene_id, entry.path, r))
+    picked = _pick(len(rows), sample, manifest.seed)
+    by_scene: dict[str, list[int]] = {}
+    for i in picked:
+        by_scene.setdefault(rows[i][0], []).append(int(i))
+    nav_settings = manifest.navmesh()
+    for scene_id in sorted(by_scene):
+        scene = load_scene(resolve_scene(manifest, scene_id, cache_dir), up=manifest.scenes[scene_id].up)
+        navmesh = (NavMesh.build_cached(scene, nav_settings, Path(cache_dir)) if cache_dir is not None
+                   else NavMesh.build(scene, nav_settings))
+        # Group agents by target: object instance id, or the point goal's coordinates.
+        groups: dict[object, list[tuple[int, int]]] = {}
+        for i in by_scene[scene_id]:
+            r = rows[i][2]
+            for a, inst in enumerate(r["target_instance_ids"]):
+                key = int(inst) if inst >= 0 else tuple(np.float32(r["target_positions"][a]).tolist())
+                groups.setdefault(key, []).append((i, a))
+        for key, members in groups.items():
+            target = key if isinstance(key, int) else np.asarray(key, dtype=np.float64)
+            field = target_field(navmesh, scene, target, manifest.settings)
+            starts = np.array([rows[i][2]["start_positions"][a] for i, a in members], dtype=np.float64)
+            stored = np.array([rows[i][2]["geodesic_distances"][a] for i, a in members], dtype=np.float64)
+            found = np.asarray(field.distance(starts), dtype=np.float64)
+            err = np.abs(found - stored)
+            err[~np.isfinite(found)] = np.inf
+            report.rechecked += len(members)
+            finite = err[np.isfinite(err)]
+            if len(finite):
+                report.max_recheck_error = max(report.max_recheck_error, float(finite.max()))
+            for (i, a), e, f, s in zip(members, err, found, stored, strict=True):
+                if e > RECHECK_REL * s + RECHECK_ABS:
+                    report.add("recheck", f"agent {a}: stored geodesic {s:.3f} m, recomputed {f:.3f} m",
+                               rows[i][1], rows[i][2]["episode_id"])

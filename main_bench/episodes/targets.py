@@ -1,0 +1,96 @@
+"""The targets of one scene: object goals (from its semantic objects) or navigable point goals.
+
+A `TargetBank` lists a scene's usable targets with their island, floor and goal points, and builds each target's
+distance field once, on first use, together with a k-d tree of its goal points for Euclidean distances.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .goals import goal_points
+from .settings import GenerationSettings
+
+if TYPE_CHECKING:
+    from ..navmesh import DistanceField, NavMesh
+    from ..scenes import Scene
+
+
+@dataclass(frozen=True, eq=False)
+class Target:
+    """One target: an object instance (category, instance id) or a point goal (category "", instance id -1)."""
+
+    instance_id: int
+    category: str
+    island: int
+    floor: int
+    goal_points: np.ndarray  # (G, 3) metres, canonical frame
+
+
+class TargetBank:
+    """A scene's targets and their lazily built distance fields (one per target, shared by all its episodes)."""
+
+    def __init__(self, scene: Scene, navmesh: NavMesh, settings: GenerationSettings) -> None:
+        self.scene = scene
+        self.navmesh = navmesh
+        self.settings = settings
+        self.excluded: dict[str, int] = {}
+        self.objects: list[Target] = []
+        self.has_objects = len(scene.objects) > 0
+        self._fields: dict[int, tuple[DistanceField, cKDTree]] = {}
+        areas = {int(isl.index): float(isl.area) for isl in navmesh.islands}
+        self._island_area = areas
+        for obj in sorted(scene.objects, key=lambda o: o.instance_id):
+            points = goal_points(navmesh, obj, settings)
+            if len(points) == 0:
+                self._exclude("object without a navigable goal point")
+                continue
+            island = int(np.asarray(navmesh.island_of(points[:1]))[0])
+            if island < 0:
+                self._exclude("object without a navigable goal point")
+                continue
+            if areas.get(island, 0.0) < settings.min_island_area:
+                self._exclude(f"object on an island under {settings.min_island_area:g} m^2")
+                continue
+            self.objects.append(Target(obj.instance_id, obj.category, island, _mode(navmesh.floor_of(points)), points))
+
+    def _exclude(self, reason: str) -> None:
+        self.excluded[reason] = self.excluded.get(reason, 0) + 1
+
+    def point_targets(self, count: int, rng: np.random.Generator) -> list[Target]:
+        """`count` point goals drawn uniformly by area over islands of at least `min_island_area` m^2."""
+        big = [i for i, a in self._island_area.items() if a >= self.settings.min_island_area]
+        if not big or count <= 0:
+            return []
+        out: list[Target] = []
+        for _ in range(4):  # draws that land on small islands are redrawn, a bounded number of times
+            points = np.asarray(self.navmesh.sample(2 * (count - len(out)) + 8, rng), dtype=np.float64)
+            islands = np.asarray(self.navmesh.island_of(points))
+            floors = np.asarray(self.navmesh.floor_of(points))
+            for p, isl, fl in zip(points, islands, floors, strict=True):
+                if len(out) < count and int(isl) in big:
+                    out.append(Target(-1, "", int(isl), int(fl), p.reshape(1, 3).copy()))
+            if len(out) >= count:
+                break
+        return out
+
+    def field(self, target: Target) -> tuple[DistanceField, cKDTree]:
+        """The target's distance field and the k-d tree of its goal points (cached for object targets)."""
+        hit = self._fields.get(target.instance_id) if target.instance_id >= 0 else None
+        if hit is None:
+            hit = (self.navmesh.distance_field(target.goal_points), cKDTree(target.goal_points))
+            if target.instance_id >= 0:
+                self._fields[target.instance_id] = hit
+        return hit
+
+
+def _mode(values: np.ndarray) -> int:
+    values = np.asarray(values, dtype=np.int64)
+    if len(values) == 0:
+        return -1
+    uniq, counts = np.unique(values, return_counts=True)
+    return int(uniq[np.argmax(counts)])

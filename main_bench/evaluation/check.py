@@ -1,0 +1,257 @@
+"""`check_policy`: conformance checks of a submission, in the spirit of Gymnasium's environment checker.
+
+Every check runs the submission through `PolicyProcess`, exactly as evaluation does, on synthetic observations
+drawn from `observation_space` with a seeded generator. The report is a list of small named checks, each
+`pass`, `fail` or `skip` (not run because an earlier check failed, or not applicable), with a message.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from ..errors import InputError, SubmissionError
+from ..scenes.objects import KNOWN_CATEGORIES
+from .isolation import Limits, PolicyError, PolicyProcess
+from .protocol import TRACKS, EpisodeInfo, TargetInfo, agent_ids, observation_space
+from .submission import PolicySpec, ProtocolError, parse_spec
+
+CHECK_NAMES: tuple[str, ...] = (
+    "loads", "protocol", "reset", "actions", "done_agents", "time_limit", "deterministic", "isolation",
+)
+Status = Literal["pass", "fail", "skip"]
+
+
+@dataclass(frozen=True)
+class CheckSettings:
+    """What `check_policy` runs: team size, sub-task, track, goal kind, steps, seed, camera and limits."""
+
+    agents: int = 2
+    task: Literal["shared", "individual"] = "shared"
+    track: str = "egocentric"
+    goal: Literal["object", "point"] = "object"
+    steps: int = 20
+    seed: int = 0
+    width: int = 128
+    height: int = 128
+    max_depth: float = 10.0
+    max_steps: int = 500
+    limits: Limits = field(default_factory=Limits)
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.agents, int) and 1 <= self.agents <= 16):
+            raise InputError(f"--agents must be an integer from 1 to 16, got {self.agents!r}")
+        if self.task not in ("shared", "individual"):
+            raise InputError(f"--task must be shared or individual, got {self.task!r}")
+        if self.track not in TRACKS:
+            raise InputError(f"--track must be one of {', '.join(TRACKS)}, got {self.track!r}")
+        if self.goal not in ("object", "point"):
+            raise InputError(f"--goal must be object or point, got {self.goal!r}")
+        if not (isinstance(self.steps, int) and self.steps >= 2):
+            raise InputError(f"--steps must be an integer of at least 2, got {self.steps!r}")
+        if self.width < 1 or self.height < 1 or not self.max_depth > 0:
+            raise InputError(f"camera {self.width}x{self.height}, max depth {self.max_depth} m: all must be positive")
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One named check: `pass`, `fail` or `skip`, and what it found."""
+
+    name: str
+    status: Status
+    message: str
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """The outcome of `check_policy`: the spec, the settings and every check in order."""
+
+    spec: str
+    settings: CheckSettings
+    checks: tuple[CheckResult, ...]
+
+    @property
+    def passed(self) -> bool:
+        """True when no check failed (skipped ones are only skipped when not applicable or after a failure)."""
+        return not self.failed
+
+    @property
+    def failed(self) -> tuple[CheckResult, ...]:
+        """The checks that failed."""
+        return tuple(c for c in self.checks if c.status == "fail")
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dict (the `--json` document of `check-agent` carries it)."""
+        settings = asdict(self.settings)
+        return {"spec": self.spec, "passed": self.passed, "settings": settings,
+                "checks": [asdict(c) for c in self.checks]}
+
+
+def synthetic_episode_info(settings: CheckSettings) -> EpisodeInfo:
+    """An `EpisodeInfo` for the settings' team: one category for all (shared) or one each (individual)."""
+    ids = agent_ids(settings.agents)
+    rng = np.random.default_rng([settings.seed, 1])
+    if settings.goal == "point":
+        targets = {a: TargetInfo("point") for a in ids}
+    else:
+        count = 1 if settings.task == "shared" else settings.agents
+        cats = rng.choice(len(KNOWN_CATEGORIES), size=count, replace=count > len(KNOWN_CATEGORIES))
+        targets = {a: TargetInfo("object", int(cats[i % count]), KNOWN_CATEGORIES[int(cats[i % count])])
+                   for i, a in enumerate(ids)}
+    return EpisodeInfo(ids, settings.task, settings.track, targets, settings.max_steps, settings.seed)
+
+
+def synthetic_observations(settings: CheckSettings, info: EpisodeInfo, acting: tuple[str, ...],
+                           rng: np.random.Generator) -> dict[str, dict[str, Any]]:
+    """Random observations of the right dtypes and shapes for the `acting` agents, drawn from `rng`."""
+    space = observation_space(settings.width, settings.height, settings.max_depth, settings.track, settings.goal)
+    h, w = settings.height, settings.width
+    goals = {}
+    if settings.goal == "point":
+        shared = rng.uniform(-10.0, 10.0, size=3).astype(np.float32)
+        goals = {a: shared if settings.task == "shared" else rng.uniform(-10, 10, 3).astype(np.float32)
+                 for a in info.agent_ids}
+    out: dict[str, dict[str, Any]] = {}
+    for agent in acting:
+        obs: dict[str, Any] = {
+            "rgb": rng.integers(0, 256, size=(h, w, 3), dtype=np.uint8),
+            "depth": rng.uniform(0.0, settings.max_depth, size=(h, w, 1)).astype(np.float32),
+            "target": goals[agent] if settings.goal == "point" else np.int64(info.targets[agent].category_id),
+            "contact": np.int64(rng.integers(0, 2)),
+        }
+        if settings.track == "gps":
+            obs["gps_compass"] = rng.uniform(-5.0, 5.0, size=4).astype(np.float32)
+        assert space.contains(obs), "synthetic observation outside observation_space"
+        out[agent] = obs
+    return out
+
+
+def check_policy(spec: str | PolicySpec, settings: CheckSettings | None = None) -> CheckReport:
+    """Run every conformance check on `spec`; a spec that cannot be parsed raises `SubmissionError`."""
+    settings = settings or CheckSettings()
+    policy_spec = parse_spec(spec) if isinstance(spec, str) else spec
+    info = synthetic_episode_info(settings)
+    script = _script(settings, info)
+    results: dict[str, CheckResult] = {}
+
+    first = _run(policy_spec, settings, info, script, results, record=True)
+    if first is not None:
+        again: dict[str, CheckResult] = {}
+        second = _run(policy_spec, settings, info, script, again, record=False)
+        results["deterministic"] = again.get("deterministic") or _compare(first, second)
+    checks = tuple(results.get(name, CheckResult(name, "skip", "not run: an earlier check failed"))
+                   for name in CHECK_NAMES)
+    return CheckReport(str(spec), settings, checks)
+
+
+def _script(settings: CheckSettings, info: EpisodeInfo) -> list[dict[str, dict[str, Any]]]:
+    """The observations of every step: the whole team first, then (with 2+ agents) without the last agent."""
+    rng = np.random.default_rng([settings.seed, 2])
+    drop_at = settings.steps // 2
+    steps = []
+    for t in range(settings.steps):
+        acting = info.agent_ids if t < drop_at or settings.agents == 1 else info.agent_ids[:-1]
+        steps.append(synthetic_observations(settings, info, acting, rng))
+    return steps
+
+
+def _run(spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo, script: list[dict[str, dict]],
+         results: dict[str, CheckResult], record: bool) -> list[dict[str, int]] | None:
+    """Load, reset and play the script once; with `record`, fill `results` for the checks it decides."""
+
+    def put(name: str, status: Status, message: str) -> None:
+        if record:
+            results[name] = CheckResult(name, status, message)
+
+    try:
+        process = PolicyProcess(spec, settings.limits, settings.seed)
+    except ProtocolError as exc:
+        put("loads", "pass", "the submission imports and builds")
+        put("protocol", "fail", str(exc))
+        if not record:
+            results["deterministic"] = CheckResult("deterministic", "fail", f"second load failed: {exc}")
+        return None
+    except (SubmissionError, PolicyError) as exc:
+        put("loads", "fail", str(exc))
+        if not record:
+            results["deterministic"] = CheckResult("deterministic", "fail", f"second load failed: {exc}")
+        return None
+    with process:
+        put("loads", "pass", f"loaded {process.policy_name} in {process.load_seconds:.2f} s in its own process")
+        put("protocol", "pass", "has reset(info) and act(observations)")
+        pid = process.pid
+        try:
+            process.reset(info)
+        except PolicyError as exc:
+            put("reset", "fail", exc.reason)
+            if exc.kind == "timeout":
+                put("time_limit", "fail", exc.reason)
+            return None
+        put("reset", "pass", f"reset({info.task}, {len(info.agent_ids)} agents, {info.track}) returned")
+        actions, seconds = [], []
+        drop_at = len(script) if settings.agents == 1 else settings.steps // 2
+        for t, observations in enumerate(script):
+            started = time.monotonic()
+            try:
+                actions.append(process.act(observations))
+            except PolicyError as exc:
+                phase = "actions" if t < drop_at else "done_agents"
+                if exc.kind == "timeout":
+                    put("time_limit", "fail", f"step {t}: {exc.reason}")
+                else:
+                    put(phase, "fail", f"step {t}: {exc.reason}")
+                if not record:
+                    results["deterministic"] = CheckResult("deterministic", "fail", f"second run, step {t}: "
+                                                           f"{exc.reason}")
+                return None
+            seconds.append(time.monotonic() - started)
+            if t + 1 == drop_at:
+                put("actions", "pass", f"{drop_at} steps with {settings.agents} agents: one int in 0..3 per agent"
+                    f" (seen {_histogram(actions)})")
+        if settings.agents == 1:
+            put("done_agents", "skip", "needs --agents 2 or more")
+        else:
+            put("done_agents", "pass", f"{len(script) - drop_at} steps after {info.agent_ids[-1]} was done: "
+                "answered only for the acting agents")
+        limit = settings.limits.step_seconds
+        put("time_limit", "pass", f"act median {1e3 * float(np.median(seconds)):.1f} ms, max "
+            f"{1e3 * max(seconds):.1f} ms (limit {limit:g} s per step)")
+        process.close()
+        if record:
+            gone = pid is not None and not _pid_alive(pid)
+            status: Status = "pass" if pid != os.getpid() and gone else "fail"
+            results["isolation"] = CheckResult("isolation", status, (
+                f"ran in process {pid} with a {settings.limits.memory_mb} MB memory limit; exited on close"
+                if status == "pass" else f"process {pid} still running after close"))
+    return actions
+
+
+def _compare(first: list[dict[str, int]], second: list[dict[str, int]] | None) -> CheckResult:
+    if second is None:
+        return CheckResult("deterministic", "fail", "the second run failed")
+    for t, (a, b) in enumerate(zip(first, second, strict=True)):
+        if a != b:
+            agent = next(k for k in a if a.get(k) != b.get(k))
+            return CheckResult("deterministic", "fail", (
+                f"two fresh loads with the same seed differ at step {t}, {agent}: {a[agent]} then {b[agent]}; "
+                "draw randomness from generators seeded by the `seed` given to the factory or EpisodeInfo.seed"))
+    return CheckResult("deterministic", "pass", f"two fresh loads with the same seed: same {len(first)} action sets")
+
+
+def _histogram(actions: list[dict[str, int]]) -> str:
+    counts = np.bincount([a for step in actions for a in step.values()], minlength=4)
+    return ", ".join(f"{name} {n}" for name, n in zip(("found", "forward", "left", "right"), counts, strict=True))
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True

@@ -1,0 +1,48 @@
+"""Fixed chunks of episodes: the unit of work, of part files and of resumption.
+
+Episodes of each track (`split/task/agents`) are sorted by id, cut to `--limit`, and split into chunks of
+`chunk_size`; chunk k of a track writes `part-k` of its records and trajectories. The chunks do not depend on
+`--workers` or the executor, so neither do the files. A chunk is finished when its records part exists (written
+atomically after its trajectories part); a restarted run skips finished chunks, so rows are never duplicated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from .results import partition_dir
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Chunk `part` of track (split, task, agents): the ids of its episodes, in order."""
+
+    split: str
+    task: str
+    agents: int
+    part: int
+    episode_ids: tuple[str, ...]
+
+    @property
+    def key(self) -> str:
+        """`<split>/<task>/<agents>#<part>`."""
+        return f"{self.split}/{self.task}/{self.agents}#{self.part}"
+
+    def records_path(self, out: Path) -> Path:
+        """Where this chunk's records part lives."""
+        return partition_dir(out, "records", self.split, self.task, self.agents) / f"part-{self.part:05d}.parquet"
+
+    def finished(self, out: Path) -> bool:
+        """Whether the chunk's records part has been written."""
+        return self.records_path(out).is_file()
+
+
+def make_chunks(split: str, task: str, agents: int, episode_ids: list[str], chunk_size: int,
+                limit: int | None) -> list[Chunk]:
+    """The chunks of one track: ids sorted, the first `limit` kept, cut into runs of `chunk_size`."""
+    ids = sorted(episode_ids)
+    if limit is not None:
+        ids = ids[:limit]
+    return [Chunk(split, task, int(agents), k, tuple(ids[s:s + chunk_size]))
+            for k, s in enumerate(range(0, len(ids), chunk_size))]

@@ -1,0 +1,324 @@
+"""Isolation: a submitted policy runs in its own process, with time and memory limits.
+
+`PolicyProcess` starts `python -m main_bench.evaluation.policy_child` (a fresh interpreter: the C-level fork is
+followed at once by exec, as multiprocessing's "spawn" does, so no simulator or OpenGL state is shared), sends
+it only `EpisodeInfo` and observations, and waits for each answer with a deadline. Whatever goes wrong in the
+policy becomes a `PolicyError` whose `reason` starts with its kind:
+
+- `exception: ValueError: bad shape (policy.py:12 in act)` -- the policy raised;
+- `timeout: act took > 10 s` (also `reset`, the episode's total, or loading);
+- `invalid_action: agent_1 returned 'x' (str); ...` -- not exactly one int in 0..3 per acting agent;
+- `dead: exit code 3`, `dead: killed by signal SIGSEGV` -- the process ended;
+- `memory: MemoryError ... (limit 4096 MB)` -- the address-space limit was hit.
+
+After a time-out, a death or a memory error the child is killed; `reset` or `restart` start a fresh one.
+A submission that cannot be loaded at all raises `SubmissionError` (bad input, CLI exit code 2).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import weakref
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import InputError, MainBenchError, SubmissionError
+from .ipc import encode_request, recv_reply, send_parts
+from .policy_child import EXIT_OUT_OF_MEMORY
+from .submission import PolicySpec, ProtocolError
+
+#: The kinds a `PolicyError.reason` starts with.
+REASON_KINDS: tuple[str, ...] = ("exception", "timeout", "invalid_action", "dead", "memory")
+NUM_ACTIONS = 4
+_SOCKET_BUFFER = 1 << 20  # one step of 3 agents x 128 x 128 RGB-D fits in one write where the kernel allows
+_THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMEXPR_NUM_THREADS",
+                "VECLIB_MAXIMUM_THREADS")
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Limits on a policy process. Times are wall-clock seconds of the policy's answers as the evaluator waits
+    for them; `episode_seconds` bounds the sum over one episode (reset and every act)."""
+
+    step_seconds: float = 10.0
+    reset_seconds: float = 60.0
+    episode_seconds: float = 600.0
+    memory_mb: int = 4096
+    load_seconds: float = 120.0
+    threads: int = 1
+
+    def __post_init__(self) -> None:
+        for name in ("step_seconds", "reset_seconds", "episode_seconds", "load_seconds"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and value > 0):
+                raise InputError(f"limit {name} must be a positive number of seconds, got {value!r}")
+        if not (isinstance(self.memory_mb, int) and self.memory_mb >= 64):
+            raise InputError(f"limit memory_mb must be an integer of at least 64 (MB), got {self.memory_mb!r}")
+        if not (isinstance(self.threads, int) and self.threads >= 1):
+            raise InputError(f"limit threads must be a positive integer, got {self.threads!r}")
+
+
+class PolicyError(MainBenchError):
+    """The policy failed this call; `reason` (`kind: detail`) is what the results record."""
+
+    def __init__(self, reason: str, details: str = "") -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.details = details
+
+    @property
+    def kind(self) -> str:
+        """`exception`, `timeout`, `invalid_action`, `dead` or `memory`."""
+        return self.reason.split(":", 1)[0]
+
+
+class PolicyProcess:
+    """A team policy in its own process; use as a context manager.
+
+    The constructor starts the process and waits (up to `limits.load_seconds`) until the submission is loaded;
+    a submission that fails to load raises `SubmissionError`. `reset` and `act` raise `PolicyError`.
+    """
+
+    def __init__(self, spec: PolicySpec, limits: Limits | None = None, seed: int = 0) -> None:
+        self.spec = spec
+        self.limits = limits or Limits()
+        self.seed = int(seed)
+        self.policy_name = ""
+        self.load_seconds = 0.0
+        #: Seconds the last call spent inside the policy, as measured in its own process.
+        self.last_policy_seconds = 0.0
+        self._proc: subprocess.Popen | None = None
+        self._sock: socket.socket | None = None
+        self._finalizer: weakref.finalize | None = None
+        self._seq = 0
+        self._episode_used = 0.0
+        self._start()
+
+    # -- public API ---------------------------------------------------------------------------------------------
+
+    @property
+    def pid(self) -> int | None:
+        """The policy process's id, or None when none runs."""
+        return self._proc.pid if self._proc is not None else None
+
+    @property
+    def alive(self) -> bool:
+        """Whether a policy process is running and usable."""
+        return self._proc is not None and self._proc.poll() is None
+
+    def reset(self, info: Any) -> None:
+        """Start an episode (`EpisodeInfo`); starts a fresh process first if the last one was stopped."""
+        if not self.alive:
+            self.restart()
+        self._episode_used = 0.0
+        budget = min(self.limits.reset_seconds, self.limits.episode_seconds)
+        what = "reset" if budget == self.limits.reset_seconds else "episode"
+        self._call("reset", info, budget, what)
+
+    def act(self, observations: dict[str, dict]) -> dict[str, int]:
+        """One step: the acting agents' observations in, one validated action (int 0..3) per acting agent out."""
+        if not self.alive:
+            raise PolicyError("dead: the policy process was stopped after an earlier failure; call restart()")
+        left = self.limits.episode_seconds - self._episode_used
+        if left <= 0:
+            raise PolicyError(f"timeout: episode took > {self.limits.episode_seconds:g} s")
+        budget, what = (self.limits.step_seconds, "act") if self.limits.step_seconds <= left else (left, "episode")
+        reply = self._call("act", observations, budget, what)
+        return validate_actions(reply, observations.keys())
+
+    def restart(self) -> None:
+        """Kill the current process (if any) and start a fresh one with the same spec and seed."""
+        self._kill()
+        self._start()
+
+    def close(self) -> None:
+        """Ask the process to exit (1 s), then kill it; idempotent."""
+        if self._proc is None:
+            return
+        if self.alive and self._sock is not None:
+            with contextlib.suppress(OSError, EOFError, TimeoutError, ValueError):
+                deadline = time.monotonic() + 1.0
+                send_parts(self._sock, encode_request(("close", -1, None)), deadline)
+                recv_reply(self._sock, deadline)
+                self._proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        self._kill()
+
+    def __enter__(self) -> PolicyProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- the process --------------------------------------------------------------------------------------------
+
+    def _start(self) -> None:
+        parent, child = socket.socketpair()
+        for end in (parent, child):
+            with contextlib.suppress(OSError):
+                end.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, _SOCKET_BUFFER)
+                end.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, _SOCKET_BUFFER)
+        env = dict(os.environ)
+        env.update({name: str(self.limits.threads) for name in _THREAD_VARS})
+        try:
+            proc = subprocess.Popen(
+                [sys.executable, "-m", "main_bench.evaluation.policy_child", str(child.fileno())],
+                pass_fds=(child.fileno(),), stdin=subprocess.DEVNULL, stdout=_stdout_target(), env=env,
+                start_new_session=True, close_fds=True,
+            )
+        finally:
+            child.close()
+        self._proc, self._sock = proc, parent
+        self._finalizer = weakref.finalize(self, _kill_process, proc, parent)
+        self._episode_used = 0.0
+        boot = {"spec": (self.spec.kind, self.spec.target, self.spec.attr, self.spec.root), "seed": self.seed,
+                "memory_mb": self.limits.memory_mb, "threads": self.limits.threads, "sys_path": list(sys.path)}
+        started = time.monotonic()
+        reply = self._exchange(boot, self.limits.load_seconds, "loading")
+        if reply.get("status") != "ready":
+            self._kill()
+            message = str(reply.get("message") or "")
+            if not message.startswith("policy spec"):
+                message = f"policy spec {self.spec}: loading raised {reply.get('type', 'an error')}" + (
+                    f": {message}" if message else "")
+            if reply.get("memory") or reply.get("cause_type") == "MemoryError":
+                message += f" (memory limit {self.limits.memory_mb} MB; raise Limits.memory_mb if it needs more)"
+            raise (ProtocolError if reply.get("stage") == "protocol" else SubmissionError)(message)
+        self.policy_name = str(reply.get("policy", ""))
+        self.load_seconds = time.monotonic() - started
+
+    def _call(self, op: str, payload: Any, budget: float, what: str) -> dict[str, Any]:
+        self._seq += 1
+        started = time.monotonic()
+        try:
+            reply = self._exchange((op, self._seq, payload), budget, what)
+        finally:
+            self._episode_used += time.monotonic() - started
+        if reply.get("stage") == "request" and reply.get("status") == "error":
+            self._kill()
+            raise self._policy_exception(reply, f"receiving the {op} request")
+        if reply.get("seq") != self._seq:
+            self._kill()
+            raise PolicyError(f"invalid_action: reply out of order (expected {self._seq}, got {reply.get('seq')!r})")
+        self.last_policy_seconds = float(reply.get("seconds", 0.0) or 0.0)
+        if reply.get("status") == "error":
+            raise self._policy_exception(reply, op)
+        if reply.get("status") != "ok":
+            self._kill()
+            raise PolicyError(f"invalid_action: unreadable reply status {reply.get('status')!r}")
+        return reply
+
+    def _exchange(self, message: Any, budget: float, what: str) -> dict[str, Any]:
+        assert self._sock is not None and self._proc is not None, "no policy process"
+        deadline = time.monotonic() + budget
+        limit = self.limits.episode_seconds if what == "episode" else budget
+        try:
+            send_parts(self._sock, encode_request(message), deadline)
+            return recv_reply(self._sock, deadline)
+        except TimeoutError:
+            self._kill()
+            raise PolicyError(f"timeout: {what} took > {limit:g} s") from None
+        except (EOFError, ConnectionError):
+            raise PolicyError(self._death_reason()) from None
+        except ValueError as exc:
+            self._kill()
+            raise PolicyError(f"invalid_action: unreadable reply from the policy process ({exc})") from None
+
+    def _policy_exception(self, reply: dict[str, Any], op: str) -> PolicyError:
+        name, message = str(reply.get("type", "Exception")), str(reply.get("message", ""))
+        where = f" ({reply['where']})" if reply.get("where") else ""
+        details = str(reply.get("traceback", ""))
+        if reply.get("memory"):
+            self._kill()
+            return PolicyError(f"memory: {name} in {op}{where} (limit {self.limits.memory_mb} MB)", details)
+        text = f"{name}: {message}" if message else name
+        return PolicyError(f"exception: {text}{where}", details)
+
+    def _death_reason(self) -> str:
+        proc = self._proc
+        assert proc is not None
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            proc.wait(timeout=2.0)
+        code = proc.returncode
+        self._kill()
+        if code is None:
+            return "dead: the policy process closed its connection"
+        if code == EXIT_OUT_OF_MEMORY:
+            return f"memory: the policy process ran out of memory (limit {self.limits.memory_mb} MB)"
+        if code < 0:
+            try:
+                name = signal.Signals(-code).name
+            except ValueError:
+                name = str(-code)
+            hint = " (out of memory?)" if -code == signal.SIGKILL else ""
+            return f"dead: killed by signal {name}{hint}"
+        return f"dead: exit code {code}"
+
+    def _kill(self) -> None:
+        if self._finalizer is not None:
+            self._finalizer()
+        self._proc = self._sock = self._finalizer = None
+
+
+def validate_actions(reply: dict[str, Any], acting: Any) -> dict[str, int]:
+    """Check a policy process's `act` reply against the acting agents; return `{agent_id: int}` or raise
+    `PolicyError` (`invalid_action: ...`) naming the agent, the value and the fix."""
+    wanted = list(acting)
+    if "not_dict" in reply:
+        got = _shown(reply["not_dict"])
+        raise PolicyError(f"invalid_action: act returned {got}, not a dict {{agent_id: action}}")
+    pairs = reply.get("actions")
+    if not isinstance(pairs, list):
+        raise PolicyError("invalid_action: unreadable reply from the policy process (no actions)")
+    actions: dict[str, int] = {}
+    for pair in pairs:
+        if not (isinstance(pair, list) and len(pair) == 2):
+            raise PolicyError("invalid_action: unreadable reply from the policy process (malformed action)")
+        key, value = pair
+        if not isinstance(key, str):
+            raise PolicyError(f"invalid_action: act returned the key {_shown(key)}; keys must be agent ids "
+                              f"such as {wanted[0] if wanted else 'agent_0'!r}")
+        if key not in wanted:
+            raise PolicyError(f"invalid_action: action for {key!r}, which is not acting (acting: "
+                              f"{', '.join(wanted)}); return actions only for the agents in the observations")
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise PolicyError(f"invalid_action: {key} returned {_shown(value)}; return an int in 0..3")
+        if not 0 <= value < NUM_ACTIONS:
+            raise PolicyError(f"invalid_action: {key} returned {value}, outside the actions 0..3")
+        actions[key] = value
+    missing = [a for a in wanted if a not in actions]
+    if missing:
+        raise PolicyError(f"invalid_action: no action for {', '.join(missing)}; return one action for every "
+                          "agent in the observations")
+    return actions
+
+
+def _shown(value: Any) -> str:
+    if isinstance(value, dict) and "repr" in value:
+        return f"{value['repr']} ({value.get('type', '?')})"
+    return f"{value!r} ({type(value).__name__})"
+
+
+def _stdout_target() -> int | None:
+    """The policy's stdout goes to our stderr, keeping our stdout (JSON output) clean."""
+    try:
+        return sys.stderr.fileno()
+    except (AttributeError, OSError, ValueError):
+        return subprocess.DEVNULL
+
+
+def _kill_process(proc: subprocess.Popen, sock: socket.socket) -> None:
+    with contextlib.suppress(OSError):
+        sock.close()
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(proc.pid, signal.SIGKILL)  # its process group: also whatever the policy started
+    if proc.poll() is None:
+        with contextlib.suppress(ProcessLookupError):
+            proc.kill()
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        proc.wait(timeout=5.0)

@@ -1,0 +1,170 @@
+"""The policy process: `python -m main_bench.evaluation.policy_child FD`, started by `PolicyProcess`.
+
+It limits its own address space and threads, loads the submission, then answers requests on the socket FD:
+`("reset", seq, EpisodeInfo)`, `("act", seq, observations)`, `("close", seq, None)`. Replies are JSON; actions
+are described, not judged (the evaluator validates them): ints as ints, anything else by its type and repr.
+Its stdout goes to the evaluator's stderr so that a policy's prints never mix with machine-readable output.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import signal
+import socket
+import sys
+import time
+import traceback
+from typing import Any
+
+from .ipc import recv_request, send_reply
+
+#: Exit code of a policy process that ran out of memory while reporting an error.
+EXIT_OUT_OF_MEMORY = 86
+_TEXT_LIMIT = 400
+
+
+def main(argv: list[str]) -> int:
+    """Run the policy process on the socket whose file descriptor is `argv[1]`."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the evaluator decides when to stop
+    sock = socket.socket(fileno=int(argv[1]))
+    try:
+        boot = recv_request(sock)
+    except EOFError:
+        return 0
+    for entry in reversed(boot["sys_path"]):
+        if entry not in sys.path:
+            sys.path.insert(0, entry)
+    from . import protocol  # noqa: F401 - decodes EpisodeInfo; our own code, imported before the memory limit
+
+    _limit_memory(boot["memory_mb"])
+    policy = _load(sock, boot)
+    if policy is None:
+        return 0
+    return _serve(sock, policy)
+
+
+def _limit_memory(memory_mb: int) -> None:
+    limit = int(memory_mb) * 1024 * 1024
+    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+
+
+def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
+    start = time.perf_counter()
+    try:
+        from .submission import PolicySpec, ProtocolError, load_policy
+
+        spec = PolicySpec(*boot["spec"])
+        try:
+            policy = load_policy(spec, boot["seed"])
+        except ProtocolError as exc:
+            _reply(sock, {"status": "error", "stage": "protocol", **_describe(exc)})
+            return None
+        torch = sys.modules.get("torch")
+        if torch is not None:
+            torch.set_num_threads(int(boot["threads"]))
+    except BaseException as exc:  # noqa: BLE001 - everything a submission raises at load is reported
+        cause = exc.__cause__ if exc.__cause__ is not None else exc
+        _reply(sock, {"status": "error", "stage": "load", **_describe(exc), "cause_type": type(cause).__name__})
+        return None
+    _reply(sock, {"status": "ready", "policy": type(policy).__name__, "seconds": time.perf_counter() - start,
+                  "pid": os.getpid()})
+    return policy
+
+
+def _serve(sock: socket.socket, policy: Any) -> int:
+    from .submission import seed_everything
+
+    while True:
+        try:
+            op, seq, payload = recv_request(sock)
+        except EOFError:
+            return 0
+        except Exception as exc:  # noqa: BLE001 - e.g. out of memory for the observations
+            _reply(sock, {"status": "error", "stage": "request", "seq": None, **_describe(exc)})
+            continue
+        if op == "close":
+            _reply(sock, {"status": "ok", "seq": seq})
+            return 0
+        start = time.perf_counter()
+        try:
+            if op == "reset":
+                seed_everything(payload.seed)
+                policy.reset(payload)
+                reply: dict[str, Any] = {"status": "ok"}
+            else:
+                reply = {"status": "ok", **encode_actions(policy.act(payload))}
+        except BaseException as exc:  # noqa: BLE001 - the policy's failure is the reply
+            reply = {"status": "error", **_describe(exc)}
+        reply["seq"] = seq
+        reply["seconds"] = time.perf_counter() - start
+        _reply(sock, reply)
+
+
+def encode_actions(result: Any) -> dict[str, Any]:
+    """Describe what `act` returned: `{"actions": [[key, value], ...]}` or `{"not_dict": ...}`.
+
+    Keys that are strings and values that are integers (Python or NumPy, not bool) pass as they are; anything
+    else is sent as `{"type": ..., "repr": ...}` for the evaluator to refuse with a useful message.
+    """
+    if not isinstance(result, dict):
+        return {"not_dict": _marker(result)}
+    pairs = []
+    for key, value in result.items():
+        pairs.append([str(key) if isinstance(key, str) else _marker(key), _encode_value(value)])
+    return {"actions": pairs}
+
+
+def _encode_value(value: Any) -> Any:
+    import numpy as np
+
+    if isinstance(value, bool | np.bool_):
+        return _marker(value)
+    if isinstance(value, int | np.integer):
+        return int(value)
+    return _marker(value)
+
+
+def _marker(value: Any) -> dict[str, str]:
+    try:
+        text = repr(value)
+    except Exception:  # noqa: BLE001 - a broken __repr__ must not hide the real problem
+        text = "<unprintable>"
+    if len(text) > 80:
+        text = text[:77] + "..."
+    return {"type": type(value).__name__, "repr": text}
+
+
+def _describe(exc: BaseException) -> dict[str, Any]:
+    frames = traceback.extract_tb(exc.__traceback__)
+    where = f"{os.path.basename(frames[-1].filename)}:{frames[-1].lineno} in {frames[-1].name}" if frames else ""
+    tail = "".join(traceback.format_exception(exc)[-6:])
+    return {
+        "type": type(exc).__name__,
+        "memory": isinstance(exc, MemoryError),
+        "message": _clip(str(exc)),
+        "where": where,
+        "traceback": tail[-2000:],
+    }
+
+
+def _clip(text: str) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= _TEXT_LIMIT else text[: _TEXT_LIMIT - 3] + "..."
+
+
+def _reply(sock: socket.socket, reply: dict[str, Any]) -> None:
+    try:
+        send_reply(sock, reply)
+    except MemoryError:
+        os._exit(EXIT_OUT_OF_MEMORY)
+    except OSError:
+        os._exit(0)  # the evaluator has gone
+
+
+if __name__ == "__main__":
+    sys.stdout = sys.stderr
+    sys.exit(main(sys.argv))

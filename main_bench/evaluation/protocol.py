@@ -1,0 +1,101 @@
+"""What a submission implements: the team policy protocol, the episode information and the spaces.
+
+A submission needs no base class: any object with `reset(info)` and `act(observations)` is a `TeamPolicy`.
+Agent ids are `agent_0` ... `agent_{N-1}`. Observations per agent follow `observation_space`; actions follow
+`ACTION_SPACE` (0 found, 1 move_forward, 2 turn_left, 3 turn_right).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol, runtime_checkable
+
+import numpy as np
+
+from ..scenes.objects import KNOWN_CATEGORIES
+
+FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT = 0, 1, 2, 3
+ACTION_NAMES: tuple[str, ...] = ("found", "move_forward", "turn_left", "turn_right")
+
+#: Tracks differ in which sensors they allow. `egocentric`: rgb, depth, target, contact. `gps`: plus gps_compass.
+TRACKS: tuple[str, ...] = ("egocentric", "gps")
+
+Observation = dict[str, Any]
+
+
+def agent_ids(n: int) -> tuple[str, ...]:
+    """The ids of an N-agent team: `agent_0` ... `agent_{N-1}`."""
+    return tuple(f"agent_{i}" for i in range(n))
+
+
+@dataclass(frozen=True)
+class TargetInfo:
+    """What an agent is told about its target: an object category (id and name), or that it is a point goal.
+
+    Never the target's position: point goals are given by the `target` observation in the agent's start frame.
+    """
+
+    kind: Literal["object", "point"]
+    category_id: int = -1
+    category: str = ""
+
+
+@dataclass(frozen=True)
+class EpisodeInfo:
+    """Given to `TeamPolicy.reset` at the start of every episode."""
+
+    agent_ids: tuple[str, ...]
+    task: Literal["shared", "individual"]
+    track: str
+    targets: dict[str, TargetInfo]
+    max_steps: int
+    seed: int
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@runtime_checkable
+class TeamPolicy(Protocol):
+    """A team policy: one object drives every agent of the team."""
+
+    def reset(self, info: EpisodeInfo) -> None:
+        """Start a new episode."""
+
+    def act(self, observations: dict[str, Observation]) -> dict[str, int]:
+        """Map each acting agent's observation to an action in 0..3. Done agents are absent from the input."""
+
+
+def action_space():
+    """Gymnasium `Discrete(4)`: found, move_forward, turn_left, turn_right."""
+    from gymnasium import spaces
+
+    return spaces.Discrete(len(ACTION_NAMES))
+
+
+def observation_space(width: int, height: int, max_depth: float, track: str, goal_kind: str):
+    """The Gymnasium `Dict` space of one agent's observation.
+
+    `rgb` uint8 (H, W, 3); `depth` float32 (H, W, 1) metres in [0, max_depth]; `target` the category id
+    (Discrete) for object goals, or the point goal (x, y, z) in the agent's start frame in metres; `contact`
+    1 if the last move was blocked or shortened; `gps_compass` (x, y, z, yaw) relative to the start, only on
+    the `gps` track.
+    """
+    from gymnasium import spaces
+
+    if track not in TRACKS:
+        from ..errors import InputError
+
+        raise InputError(f"unknown track {track!r}; use one of {', '.join(TRACKS)}")
+    target = (
+        spaces.Discrete(len(KNOWN_CATEGORIES))
+        if goal_kind == "object"
+        else spaces.Box(-1000.0, 1000.0, shape=(3,), dtype=np.float32)
+    )
+    entries = {
+        "rgb": spaces.Box(0, 255, shape=(height, width, 3), dtype=np.uint8),
+        "depth": spaces.Box(0.0, float(max_depth), shape=(height, width, 1), dtype=np.float32),
+        "target": target,
+        "contact": spaces.Discrete(2),
+    }
+    if track == "gps":
+        entries["gps_compass"] = spaces.Box(-1000.0, 1000.0, shape=(4,), dtype=np.float32)
+    return spaces.Dict(entries)

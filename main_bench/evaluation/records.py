@@ -1,0 +1,50 @@
+"""The results' row schemas: per-agent and per-team metric records, and per-step trajectories.
+
+A results directory holds `records/split=<s>/task=<t>/agents=<n>/part-<k>.parquet` (one row per (episode,
+agent) with `agent_index` 0..N-1, plus one team row per episode with `agent_index` -1),
+`trajectories/split=<s>/task=<t>/agents=<n>/part-<k>.parquet` (one row per agent per step, step 0 = start),
+and `summary.json`. Distances in metres, yaw in radians.
+"""
+
+from __future__ import annotations
+
+import pyarrow as pa
+
+#: Version of the records, trajectories and summary.json; readers refuse a newer one.
+RESULTS_SCHEMA_VERSION = 1
+TEAM = -1
+
+RECORD_SCHEMA = pa.schema(
+    [
+        pa.field("episode_id", pa.string(), nullable=False),
+        pa.field("scene_id", pa.string(), nullable=False),
+        pa.field("agent_index", pa.int8(), nullable=False),  # -1: the team row
+        pa.field("success", pa.float32(), nullable=False),
+        pa.field("spl", pa.float32(), nullable=False),
+        pa.field("soft_spl", pa.float32(), nullable=False),
+        pa.field("distance_to_goal", pa.float32(), nullable=False),
+        pa.field("path_length", pa.float32(), nullable=False),  # team: sum over agents
+        pa.field("steps", pa.int32(), nullable=False),  # team: episode length in steps
+        pa.field("collisions", pa.int32(), nullable=False),  # team: sum over agents
+        pa.field("geodesic_distance", pa.float32(), nullable=False),  # l_i; team: L as DESIGN.md defines it
+        pa.field("called_found", pa.bool_(), nullable=False),
+        pa.field("failure", pa.string(), nullable=False),  # "" or why the policy failed (exception, timeout, ...)
+    ],
+    metadata={"main_bench_schema_version": str(RESULTS_SCHEMA_VERSION)},
+)
+
+TRAJECTORY_SCHEMA = pa.schema(
+    [
+        pa.field("episode_id", pa.string(), nullable=False),
+        pa.field("step", pa.int32(), nullable=False),
+        pa.field("agent_index", pa.int8(), nullable=False),
+        pa.field("action", pa.int8(), nullable=False),  # -1 at step 0 and for done agents
+        pa.field("x", pa.float32(), nullable=False),
+        pa.field("y", pa.float32(), nullable=False),
+        pa.field("z", pa.float32(), nullable=False),
+        pa.field("yaw", pa.float32(), nullable=False),
+        pa.field("collided", pa.bool_(), nullable=False),
+        pa.field("distance_to_goal", pa.float32(), nullable=False),
+    ],
+    metadata={"main_bench_schema_version": str(RESULTS_SCHEMA_VERSION)},
+)

@@ -1,0 +1,93 @@
+"""Reading and writing a results directory (layout in `records.py`).
+
+`summary.json` holds: `schema_version`, `toolkit_version`, `submission` (name, description, links, date,
+baseline, spec), `dataset` (path, manifest_hash), `settings`, `counts`, and `tracks`: for each
+`<split>/<task>/<agents>` key, each team metric's `{mean, ci_low, ci_high}` and the episode count.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.dataset as pads
+import pyarrow.parquet as pq
+
+from ..errors import ResultsError
+from ..io import atomic_path, check_schema_version, read_json
+from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
+
+PARTITION_SCHEMA = pa.schema([pa.field("split", pa.string()), pa.field("task", pa.string()),
+                              pa.field("agents", pa.int8())])
+
+
+def partition_dir(root: Path, kind: str, split: str, task: str, agents: int) -> Path:
+    """`root/<kind>/split=<split>/task=<task>/agents=<agents>`; kind is `records` or `trajectories`."""
+    return Path(root) / kind / f"split={split}" / f"task={task}" / f"agents={agents}"
+
+
+def write_part(root: Path, kind: str, split: str, task: str, agents: int, part: int, table: pa.Table) -> Path:
+    """Write one part file atomically (zstd) and return its path; `table` must match the kind's schema."""
+    schema = RECORD_SCHEMA if kind == "records" else TRAJECTORY_SCHEMA
+    table = table.cast(schema)
+    path = partition_dir(root, kind, split, task, agents) / f"part-{part:05d}.parquet"
+    with atomic_path(path, suffix=".parquet") as tmp:
+        pq.write_table(table, tmp, compression="zstd", row_group_size=50_000)
+    return path
+
+
+def _read(root: Path, kind: str, filter_expr=None) -> pd.DataFrame:
+    schema = RECORD_SCHEMA if kind == "records" else TRAJECTORY_SCHEMA
+    base = root / kind
+    if not base.is_dir():
+        return pd.DataFrame({f.name: pd.Series(dtype=object) for f in list(schema) + list(PARTITION_SCHEMA)})
+    ds = pads.dataset(base, format="parquet", partitioning=pads.partitioning(PARTITION_SCHEMA, flavor="hive"),
+                      schema=pa.unify_schemas([schema, PARTITION_SCHEMA]), exclude_invalid_files=False)
+    return ds.to_table(filter=filter_expr).to_pandas()
+
+
+@dataclass(frozen=True, eq=False)
+class Results:
+    """A loaded results directory: its summary and every metric record (agent rows and team rows)."""
+
+    path: Path
+    summary: dict[str, Any]
+    records: pd.DataFrame
+
+    @property
+    def teams(self) -> pd.DataFrame:
+        """The team rows (one per episode)."""
+        return self.records[self.records["agent_index"] == TEAM]
+
+    @property
+    def agents(self) -> pd.DataFrame:
+        """The per-agent rows."""
+        return self.records[self.records["agent_index"] != TEAM]
+
+    def trajectory(self, episode_id: str) -> pd.DataFrame:
+        """The per-step rows of one episode, sorted by step and agent."""
+        df = _read(self.path, "trajectories", pads.field("episode_id") == episode_id)
+        if df.empty:
+            raise ResultsError(f"no trajectory for episode {episode_id!r}", path=self.path)
+        return df.sort_values(["step", "agent_index"]).reset_index(drop=True)
+
+
+def load_results(path: str | Path) -> Results:
+    """Load a results directory written by `main-bench evaluate`; a bad directory raises `ResultsError`."""
+    path = Path(path)
+    if not path.is_dir():
+        raise ResultsError("results directory not found", path=path)
+    summary_path = path / "summary.json"
+    if not summary_path.is_file():
+        raise ResultsError("no summary.json: not a finished results directory (run main-bench evaluate)",
+                           path=path)
+    summary = read_json(summary_path, what="results summary")
+    check_schema_version(summary, RESULTS_SCHEMA_VERSION, summary_path, "results summary")
+    try:
+        records = _read(path, "records")
+    except (pa.ArrowInvalid, OSError) as exc:
+        raise ResultsError(f"unreadable records: {exc}", path=path) from None
+    return Results(path=path, summary=summary, records=records)

@@ -1,0 +1,185 @@
+"""`evaluate(settings)`: score a team policy on a data set split and write a results directory.
+
+Steps: read the data set's manifest; list its tracks (`split/task/agents`) for the split; cut each track's
+episodes into fixed chunks; skip the chunks a previous run of the same evaluation finished; run the rest
+(in this process, on local worker processes, or on Ray); then compute `summary.json` from every record and
+write it last. A results directory belongs to one evaluation: `run.json` records its identity and a different
+evaluation into the same directory is refused (nothing is overwritten).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Protocol
+
+from .. import __version__
+from ..errors import DatasetError, ResultsError, SubmissionError
+from ..io import atomic_write_json, read_json
+from .baselines import privileged_baseline
+from .chunks import Chunk, make_chunks
+from .results import _read
+from .settings import EvalSettings, SubmissionMeta
+from .summary import build_summary
+from .task_rules import rules_json
+
+RUN_FILE = "run.json"
+SUBMISSION_FILE = "submission.json"
+
+
+class ProgressSink(Protocol):
+    """Receives progress: `start` once with the planned work, then `advance` as episodes finish."""
+
+    def start(self, episodes_total: int, episodes_done: int) -> None:
+        """Episodes planned in all, and how many a previous run already finished."""
+
+    def advance(self, episodes: int, agent_steps: int) -> None:
+        """Episodes just finished and the agent-steps they took."""
+
+
+@dataclass(frozen=True)
+class EvaluationOutcome:
+    """What `evaluate` did: the summary written, chunks run and skipped, agent-steps and seconds of this run."""
+
+    out: Path
+    summary: dict[str, Any]
+    chunks_run: int
+    chunks_skipped: int
+    episodes_run: int
+    agent_steps: int
+    seconds: float
+
+    @property
+    def agent_steps_per_second(self) -> float:
+        """Throughput of this run (agent-steps per wall-clock second, rendering and policy included)."""
+        return self.agent_steps / self.seconds if self.seconds > 0 else 0.0
+
+
+def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
+    """(manifest, chunks) of the evaluation; a split/task/agents selection with no episodes raises DatasetError."""
+    from ..episodes.dataset import load_table, read_manifest
+
+    manifest = read_manifest(settings.episodes)
+    tracks = sorted({(s.task, int(s.agents)) for s in manifest.shards if s.split == settings.split})
+    if not tracks:
+        splits = sorted({s.split for s in manifest.shards})
+        raise DatasetError(f"no episodes in split {settings.split!r}; the data set has {', '.join(splits) or 'none'}",
+                           path=settings.episodes)
+    chosen = [(t, a) for t, a in tracks
+              if (settings.tasks is None or t in settings.tasks) and (settings.agents is None or a in settings.agents)]
+    if not chosen:
+        have = ", ".join(f"{t}/{a}" for t, a in tracks)
+        raise DatasetError(f"no episodes for the chosen --task/--agents in split {settings.split!r}; "
+                           f"it has task/agents {have}", path=settings.episodes)
+    chunks: list[Chunk] = []
+    for task, agents in chosen:
+        ids = load_table(settings.episodes, settings.split, task, agents).column("episode_id").to_pylist()
+        chunks.extend(make_chunks(settings.split, task, agents, ids, settings.chunk_size, settings.limit))
+    return manifest, chunks
+
+
+def submission_meta(settings: EvalSettings) -> SubmissionMeta:
+    """The submission's metadata: the given one, completed from `submission.json` in a directory submission,
+    else named after the spec (baselines are marked as such)."""
+    meta = settings.submission
+    spec = settings.agent.strip()
+    doc: dict[str, Any] = {}
+    folder = Path(spec.split(":", 1)[0]) if not spec.startswith("baseline:") else None
+    if folder is not None and folder.is_dir() and (folder / SUBMISSION_FILE).is_file():
+        doc = read_json(folder / SUBMISSION_FILE, what="submission metadata")
+        if not isinstance(doc, dict):
+            raise SubmissionError("submission.json must be a JSON object with name, description, links",
+                                  path=folder / SUBMISSION_FILE)
+    links = meta.links or tuple(doc.get("links") or ())
+    if isinstance(links, str):
+        links = (links,)
+    is_baseline = meta.baseline or bool(doc.get("baseline", False)) or spec.startswith("baseline:")
+    name = meta.name or str(doc.get("name") or "") or (spec if spec.startswith("baseline:") else Path(
+        spec.split(":", 1)[0]).stem or spec)
+    return SubmissionMeta(name=name, description=meta.description or str(doc.get("description") or ""),
+                          links=tuple(str(v) for v in links), date=meta.date or str(doc.get("date") or ""),
+                          baseline=is_baseline)
+
+
+def _check_run_file(out: Path, identity: dict[str, Any]) -> None:
+    path = out / RUN_FILE
+    if path.is_file():
+        old = read_json(path, what="results run file")
+        if old.get("identity") != identity:
+            diff = sorted(k for k in identity if (old.get("identity") or {}).get(k) != identity[k])
+            raise ResultsError(f"holds a different evaluation (differs in {', '.join(diff)}); give a new --out "
+                               "or delete this directory", path=out)
+    elif out.is_dir() and any(out.iterdir()):
+        raise ResultsError("is not empty and is not a main-bench results directory; give a new --out", path=out)
+    else:
+        atomic_write_json(path, {"schema_version": 1, "identity": identity, "toolkit_version": __version__})
+
+
+def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> EvaluationOutcome:
+    """Run (or resume) an evaluation and write its results directory; returns what was done and the summary.
+
+    Raises `DatasetError`/`SubmissionError`/`ResultsError` for bad input before anything is written, and
+    `PolicyFailure` when the policy fails too many episodes in a row (finished chunks are kept).
+    """
+    t0 = time.perf_counter()
+    if privileged_baseline(settings.agent) is None:
+        from .submission import parse_spec
+
+        parse_spec(settings.agent)  # a malformed spec fails now, before any file is written
+    manifest, chunks = plan(settings)
+    meta = submission_meta(settings)
+    settings = replace(settings, submission=meta)
+    out = Path(settings.out)
+    _check_run_file(out, settings.identity())
+    pending = [c for c in chunks if not c.finished(out)]
+    skipped = len(chunks) - len(pending)
+    if progress is not None:
+        progress.start(sum(len(c.episode_ids) for c in chunks),
+                       sum(len(c.episode_ids) for c in chunks if c.finished(out)))
+    counters = {"episodes": 0, "steps": 0}
+
+    def on_message(kind: str, value: Any) -> None:
+        if kind == "episode":
+            counters["episodes"] += 1
+            counters["steps"] += int(value)
+            if progress is not None:
+                progress.advance(1, int(value))
+        elif kind == "chunk" and settings.executor == "ray":
+            counters["episodes"] += value.episodes
+            counters["steps"] += value.agent_steps
+            if progress is not None:
+                progress.advance(value.episodes, value.agent_steps)
+
+    if pending:
+        from . import executors
+
+        if settings.executor == "ray":
+            executors.run_ray(settings, pending, settings.workers, on_message)
+        else:
+            executors.run_local(settings, pending, settings.workers, on_message)
+    summary = write_summary(settings, manifest, chunks)
+    return EvaluationOutcome(out=out, summary=summary, chunks_run=len(pending), chunks_skipped=skipped,
+                             episodes_run=counters["episodes"], agent_steps=counters["steps"],
+                             seconds=time.perf_counter() - t0)
+
+
+def write_summary(settings: EvalSettings, manifest: Any, chunks: list[Chunk]) -> dict[str, Any]:
+    """Compute `summary.json` from the records of `chunks` and write it atomically; returns it."""
+    out = Path(settings.out)
+    records = _read(out, "records")
+    keys = {(c.split, c.task, c.agents) for c in chunks}
+    if not records.empty:
+        mask = [(s, t, int(a)) in keys for s, t, a in zip(records["split"], records["task"], records["agents"],
+                                                           strict=True)]
+        records = records[mask]
+    meta = {
+        "toolkit_version": __version__,
+        "submission": {**settings.submission.to_json(), "spec": settings.agent},
+        "dataset": {"path": str(Path(settings.episodes).resolve()), "manifest_hash": manifest.manifest_hash},
+        "settings": settings.to_json(),
+        "task_rules": rules_json(manifest),
+    }
+    summary = build_summary(records, settings.seed, meta)
+    atomic_write_json(out / "summary.json", summary)
+    return summary

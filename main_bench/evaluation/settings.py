@@ -1,0 +1,126 @@
+"""Evaluation settings: what `main-bench evaluate` was asked to do, passed explicitly to the runner.
+
+Task rules (agent size, success distance, max steps) are not here: they come from the data set's manifest, so
+every submission is scored with the data set's own values.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from .protocol import TRACKS
+
+EXECUTORS = ("local", "ray")
+RENDERERS = ("auto", "gl", "tiny")
+
+
+@dataclass(frozen=True)
+class SubmissionMeta:
+    """The submission's metadata as the leaderboard shows it (`summary.json` -> `submission`)."""
+
+    name: str = ""
+    description: str = ""
+    links: tuple[str, ...] = ()
+    date: str = ""
+    baseline: bool = False
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict (links as a list)."""
+        return {**asdict(self), "links": list(self.links)}
+
+
+@dataclass(frozen=True)
+class PolicyLimits:
+    """Resource limits of a submitted policy: seconds per `act` call, seconds per episode, memory in MiB."""
+
+    step_seconds: float = 10.0
+    episode_seconds: float = 1800.0
+    memory_mb: int = 8192
+
+    def __post_init__(self) -> None:
+        for name in ("step_seconds", "episode_seconds"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise InputError(f"--{name.replace('_', '-')} must be a positive number of seconds, got {value}")
+        if self.memory_mb < 64:
+            raise InputError(f"--memory-mb must be at least 64 MiB, got {self.memory_mb}")
+
+
+@dataclass(frozen=True)
+class EvalSettings:
+    """One evaluation run. Paths as given; `tasks`/`agents` None mean every task / team size in the split.
+
+    `limit`: at most this many episodes per (task, agents) track, the first by episode id. `chunk_size`:
+    episodes per part file; fixed chunks make a run resumable and its files independent of `workers`.
+    `max_consecutive_failures`: policy failures in a row after which evaluation stops (PolicyFailure).
+    """
+
+    episodes: Path
+    split: str
+    agent: str
+    out: Path
+    tasks: tuple[str, ...] | None = None
+    agents: tuple[int, ...] | None = None
+    workers: int = 1
+    renderer: str = "auto"
+    limit: int | None = None
+    executor: str = "local"
+    seed: int = 0
+    track: str = "egocentric"
+    chunk_size: int = 8
+    max_consecutive_failures: int = 5
+    cache_dir: Path | None = None
+    limits: PolicyLimits = field(default_factory=PolicyLimits)
+    submission: SubmissionMeta = field(default_factory=SubmissionMeta)
+
+    def __post_init__(self) -> None:
+        if self.workers < 1:
+            raise InputError(f"--workers must be at least 1, got {self.workers}")
+        if self.renderer not in RENDERERS:
+            raise InputError(f"--renderer must be one of {', '.join(RENDERERS)}, got {self.renderer!r}")
+        if self.executor not in EXECUTORS:
+            raise InputError(f"--executor must be local or ray, got {self.executor!r}")
+        if self.track not in TRACKS:
+            raise InputError(f"--track must be one of {', '.join(TRACKS)}, got {self.track!r}")
+        if self.limit is not None and self.limit < 1:
+            raise InputError(f"--limit must be at least 1 episode, got {self.limit}")
+        if self.chunk_size < 1:
+            raise InputError(f"--chunk-size must be at least 1, got {self.chunk_size}")
+        if self.max_consecutive_failures < 1:
+            raise InputError(f"--max-failures must be at least 1, got {self.max_consecutive_failures}")
+        if not (0 <= self.seed < 2**63):
+            raise InputError(f"--seed must be an integer from 0 to 2**63-1, got {self.seed}")
+        if self.tasks is not None:
+            for task in self.tasks:
+                if task not in ("shared", "individual"):
+                    raise InputError(f"--task must be shared, individual or both, got {task!r}")
+
+    def identity(self) -> dict[str, Any]:
+        """What makes two runs the same evaluation (compared on resume); workers and executor excluded."""
+        return {
+            "episodes": str(Path(self.episodes).resolve()),
+            "split": self.split,
+            "agent": self.agent,
+            "tasks": None if self.tasks is None else list(self.tasks),
+            "agents": None if self.agents is None else list(self.agents),
+            "limit": self.limit,
+            "seed": self.seed,
+            "track": self.track,
+            "chunk_size": self.chunk_size,
+        }
+
+    def to_json(self) -> dict[str, Any]:
+        """Every setting as JSON (`summary.json` -> `settings`)."""
+        return {
+            **self.identity(),
+            "out": str(self.out),
+            "workers": self.workers,
+            "renderer": self.renderer,
+            "executor": self.executor,
+            "max_consecutive_failures": self.max_consecutive_failures,
+            "limits": asdict(self.limits),
+        }

@@ -1,0 +1,88 @@
+"""`summary.json`: means with 95% bootstrap confidence intervals per track, counts and failures.
+
+A pure function of the metric records (plus the run's metadata), so it can be rebuilt from a results directory.
+Track keys are `<split>/<task>/<agents>`. Each track holds `episodes`, `failed_episodes`, and for the team rows
+(`team`) and the agent rows (`agent`) each metric's `{mean, ci_low, ci_high}`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .metrics import AGENT_METRICS, TEAM_METRICS, bootstrap_ci
+from .records import RESULTS_SCHEMA_VERSION, TEAM
+
+#: Failures listed one by one in summary.json (the rest are counted).
+MAX_LISTED_FAILURES = 200
+
+
+def track_key(split: str, task: str, agents: int) -> str:
+    """`<split>/<task>/<agents>`."""
+    return f"{split}/{task}/{int(agents)}"
+
+
+def _ci_seed(seed: int, key: str, metric: str) -> int:
+    digest = hashlib.sha256(f"{seed}\0{key}\0{metric}".encode()).digest()
+    return int.from_bytes(digest[:8], "little")
+
+
+def _stats(values: np.ndarray, seed: int) -> dict[str, float | None]:
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return {"mean": None, "ci_low": None, "ci_high": None, "count": 0}
+    mean, lo, hi = bootstrap_ci(finite, seed)
+    return {"mean": mean, "ci_low": lo, "ci_high": hi, "count": int(finite.size)}
+
+
+def track_stats(records: pd.DataFrame, key: str, seed: int) -> dict[str, Any]:
+    """Statistics of one track's records (team rows and agent rows of its episodes)."""
+    team = records[records["agent_index"] == TEAM]
+    agent = records[records["agent_index"] != TEAM]
+    return {
+        "episodes": int(len(team)),
+        "failed_episodes": int((team["failure"] != "").sum()),
+        "team": {m: _stats(team[m].to_numpy(dtype=np.float64), _ci_seed(seed, key, "team:" + m))
+                 for m in TEAM_METRICS},
+        "agent": {m: _stats(agent[m].to_numpy(dtype=np.float64), _ci_seed(seed, key, "agent:" + m))
+                  for m in AGENT_METRICS},
+    }
+
+
+def build_summary(records: pd.DataFrame, seed: int, meta: dict[str, Any]) -> dict[str, Any]:
+    """The summary document: `meta` (submission, dataset, settings, task_rules, toolkit_version) plus counts,
+    failures and per-track statistics computed from `records` (with split/task/agents columns)."""
+    tracks: dict[str, Any] = {}
+    if not records.empty:
+        groups = records.groupby(["split", "task", "agents"], observed=True, sort=True)
+        for (split, task, agents), frame in groups:
+            key = track_key(str(split), str(task), int(agents))
+            tracks[key] = track_stats(frame, key, seed)
+    team = records[records["agent_index"] == TEAM] if not records.empty else records
+    failed = team[team["failure"] != ""] if not team.empty else team
+    reasons: dict[str, int] = {}
+    for reason in failed["failure"] if not failed.empty else []:
+        kind = str(reason).split(":", 1)[0]
+        reasons[kind] = reasons.get(kind, 0) + 1
+    listed = failed.sort_values("episode_id").head(MAX_LISTED_FAILURES) if not failed.empty else failed
+    return {
+        "schema_version": RESULTS_SCHEMA_VERSION,
+        **meta,
+        "counts": {
+            "episodes": int(len(team)),
+            "agent_rows": int(len(records) - len(team)),
+            "failed_episodes": int(len(failed)),
+            "failures_by_kind": dict(sorted(reasons.items())),
+        },
+        "failures": [{"episode_id": str(r.episode_id), "reason": str(r.failure)} for r in listed.itertuples()],
+        "tracks": tracks,
+    }
+
+
+def finite_or_none(value: float) -> float | None:
+    """JSON has no inf/nan: None for a non-finite number."""
+    return float(value) if math.isfinite(value) else None

@@ -1,0 +1,275 @@
+"""A worker: runs chunks of episodes and writes their part files. One `WorkerContext` per worker process.
+
+The context keeps what is expensive to rebuild between chunks of the same worker: loaded scenes and navmeshes,
+one simulator per scene, the target distance fields, and the policy (a privileged baseline in this process, or
+a submission in its own `PolicyProcess`). Nothing it keeps changes results: every episode starts from the
+data set's start state, the policy is reset with a seed from (evaluation seed, episode id).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+
+from ..episodes.schema import Episode
+from ..errors import DatasetError, PolicyFailure
+from .baselines import privileged_baseline
+from .chunks import Chunk
+from .episode_loop import EpisodeFailure, LoopSettings, run_episode, target_key
+from .metrics import EpisodeTrace, episode_metrics
+from .records import RECORD_SCHEMA, TRAJECTORY_SCHEMA
+from .results import write_part
+from .settings import EvalSettings
+from .task_rules import rules_from_manifest, sim_settings_from_manifest
+
+#: Target distance fields kept per worker (they are rebuilt on a miss; results do not depend on this).
+FIELD_CACHE = 64
+#: Extra clearance (metres) of the navmesh the privileged baselines plan on, so their paths keep off walls.
+PLAN_MARGIN = 0.1
+
+
+@dataclass(frozen=True)
+class ChunkReport:
+    """What a finished chunk reports: its episodes, agent-steps, failures ("episode_id: reason") and seconds."""
+
+    key: str
+    episodes: int
+    agent_steps: int
+    failures: tuple[str, ...]
+    seconds: float
+
+
+class _IsolatedPolicy:
+    """A `PolicyProcess` whose `PolicyError`s become `EpisodeFailure`s (the episode fails, evaluation goes on)."""
+
+    privileged = False
+    uses_pixels = True
+
+    def __init__(self, settings: EvalSettings) -> None:
+        from .isolation import Limits, PolicyProcess
+        from .submission import parse_spec
+
+        limits = Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
+                        memory_mb=settings.limits.memory_mb)
+        self._proc = PolicyProcess(parse_spec(settings.agent), limits, settings.seed)
+
+    def reset(self, info: Any) -> None:
+        from .isolation import PolicyError
+
+        try:
+            self._proc.reset(info)
+        except PolicyError as exc:
+            raise EpisodeFailure(exc.reason) from None
+
+    def act(self, observations: dict[str, dict]) -> dict[str, int]:
+        from .isolation import PolicyError
+
+        try:
+            return self._proc.act(observations)
+        except PolicyError as exc:  # a stopped process is restarted by the next reset
+            raise EpisodeFailure(exc.reason) from None
+
+    def close(self) -> None:
+        self._proc.close()
+
+
+class WorkerContext:
+    """Runs chunks for one evaluation in this process; `close()` when done."""
+
+    def __init__(self, settings: EvalSettings) -> None:
+        from ..episodes.dataset import read_manifest
+
+        self.settings = settings
+        self.manifest = read_manifest(settings.episodes)
+        self.sim_settings = sim_settings_from_manifest(self.manifest, settings.renderer)
+        self._episodes: dict[tuple[str, int], dict[str, Episode]] = {}
+        self._scenes: dict[str, tuple[Any, Any]] = {}
+        self._plan_navmeshes: dict[str, Any] = {}
+        self._sims: dict[tuple[str, int], Any] = {}
+        self._fields: OrderedDict[tuple, Any] = OrderedDict()
+        self._policy: Any = None
+        self._privileged = False
+        self.streak: list[str] = []
+
+    # -- resources ----------------------------------------------------------------------------------------------
+
+    def _policy_for(self) -> Any:
+        if self._policy is None:
+            factory = privileged_baseline(self.settings.agent)
+            if factory is not None:
+                self._policy, self._privileged = factory(self.settings.seed), True
+            else:
+                self._policy, self._privileged = _IsolatedPolicy(self.settings), False
+        return self._policy
+
+    def _episode(self, chunk: Chunk, episode_id: str) -> Episode:
+        key = (chunk.task, chunk.agents)
+        if key not in self._episodes:
+            from ..episodes.dataset import load_episodes
+
+            eps = load_episodes(self.settings.episodes, chunk.split, chunk.task, chunk.agents)
+            self._episodes[key] = {e.episode_id: e for e in eps}
+        try:
+            return self._episodes[key][episode_id]
+        except KeyError:
+            raise DatasetError(f"episode {episode_id!r} is not in the data set any more; was it regenerated "
+                               "under this results directory? Use a new --out", path=self.settings.episodes) from None
+
+    def _scene(self, scene_id: str) -> tuple[Any, Any]:
+        if scene_id not in self._scenes:
+            from ..episodes.dataset import resolve_scene
+            from ..navmesh import NavMesh
+            from ..scenes.loader import load_scene
+
+            entry = self.manifest.scenes.get(scene_id)
+            path = resolve_scene(self.manifest, scene_id, self.settings.cache_dir)
+            scene = load_scene(path, up=getattr(entry, "up", "auto") or "auto")
+            navmesh = NavMesh.build_cached(scene, self.manifest.navmesh(), self._navmesh_cache())
+            self._scenes[scene_id] = (scene, navmesh)
+        return self._scenes[scene_id]
+
+    def _navmesh_cache(self) -> Path:
+        if self.settings.cache_dir is not None:
+            return Path(self.settings.cache_dir) / "navmesh"
+        from ..scenes.builtin import default_cache_dir
+
+        return Path(default_cache_dir()) / "navmesh"
+
+    def _sim(self, scene_id: str, agents: int) -> Any:
+        key = (scene_id, agents)
+        if key not in self._sims:
+            from ..sim import Simulator
+
+            for old in [k for k in self._sims if k[0] != scene_id]:
+                self._sims.pop(old).close()
+            scene, navmesh = self._scene(scene_id)
+            self._sims[key] = Simulator(scene, navmesh, self.sim_settings, seed=self.settings.seed)
+        return self._sims[key]
+
+    def _plan_navmesh(self, scene_id: str) -> Any:
+        """The privileged baselines' planning navmesh: the data set's, eroded by `PLAN_MARGIN` more."""
+        if scene_id not in self._plan_navmeshes:
+            from dataclasses import replace
+
+            from ..navmesh import NavMesh
+
+            scene, _ = self._scene(scene_id)
+            nav = self.manifest.navmesh()
+            wider = replace(nav, agent_radius=float(nav.agent_radius) + PLAN_MARGIN)
+            self._plan_navmeshes[scene_id] = NavMesh.build_cached(scene, wider, self._navmesh_cache())
+        return self._plan_navmeshes[scene_id]
+
+    def _fields_for(self, episode: Episode, planning: bool = False) -> list[Any]:
+        """Each agent's target distance field (on the planning navmesh when `planning`; None where the
+        target has no goal point there)."""
+        from ..episodes.goals import target_field
+        from ..errors import InputError
+
+        scene, navmesh = self._scene(episode.scene_id)
+        mesh = self._plan_navmesh(episode.scene_id) if planning else navmesh
+        out = []
+        for i in range(episode.num_agents):
+            key = (episode.scene_id, planning, target_key(episode, i))
+            if key in self._fields:
+                self._fields.move_to_end(key)
+            else:
+                inst = int(episode.target_instance_ids[i])
+                target = inst if inst >= 0 else np.asarray(episode.target_positions[i], dtype=np.float64)
+                try:
+                    field = target_field(mesh, scene, target, self.manifest)
+                    if planning and not np.any(field.reachable_targets):
+                        field = None
+                except InputError:
+                    if not planning:
+                        raise
+                    field = None
+                self._fields[key] = field
+                while len(self._fields) > FIELD_CACHE:
+                    self._fields.popitem(last=False)
+            out.append(self._fields[key])
+        return out
+
+    # -- work ---------------------------------------------------------------------------------------------------
+
+    def run_chunk(self, chunk: Chunk, on_episode: Callable[[int], None] | None = None) -> ChunkReport:
+        """Play the chunk's episodes, write its trajectories then its records part; report.
+
+        Raises `PolicyFailure` (and writes nothing for this chunk) when the policy fails
+        `max_consecutive_failures` episodes in a row.
+        """
+        t0 = time.perf_counter()
+        policy = self._policy_for()
+        rules = rules_from_manifest(self.manifest, chunk.task)
+        loop = LoopSettings(rules=rules, track=self.settings.track, forward_step=self.sim_settings.forward_step,
+                            turn_angle=math.radians(self.sim_settings.turn_angle_deg))
+        render = bool(getattr(policy, "uses_pixels", True))
+        records: list[dict] = []
+        trajectories: list[pa.Table] = []
+        failures: list[str] = []
+        steps_total = 0
+        for episode_id in chunk.episode_ids:
+            episode = self._episode(chunk, episode_id)
+            sim = self._sim(episode.scene_id, episode.num_agents)
+            fields = self._fields_for(episode)
+            plan_fields = self._fields_for(episode, planning=True) if self._privileged else None
+            trace, failure, steps = run_episode(episode, sim, fields, policy, loop, self.settings.seed,
+                                                self._privileged, render, plan_fields)
+            steps_total += steps
+            agents, team = episode_metrics(trace, episode.geodesic_distances, rules.task, rules.success_distance)
+            for row in [*agents, team]:
+                records.append({**row, "episode_id": episode_id, "scene_id": episode.scene_id, "failure": failure})
+            trajectories.append(trajectory_table(trace))
+            if failure:
+                failures.append(f"{episode_id}: {failure}")
+                self.streak.append(f"{episode_id}: {failure}")
+                if len(self.streak) >= self.settings.max_consecutive_failures:
+                    raise PolicyFailure(
+                        f"policy {self.settings.agent!r} failed {len(self.streak)} episodes in a row; stopped. "
+                        f"Reasons: {'; '.join(self.streak[-3:])}. Check it with `main-bench evaluate check-agent`")
+            else:
+                self.streak.clear()
+            if on_episode is not None:
+                on_episode(steps)
+        traj = pa.concat_tables(trajectories) if trajectories else TRAJECTORY_SCHEMA.empty_table()
+        write_part(self.settings.out, "trajectories", chunk.split, chunk.task, chunk.agents, chunk.part, traj)
+        table = pa.Table.from_pylist(records, schema=RECORD_SCHEMA)
+        write_part(self.settings.out, "records", chunk.split, chunk.task, chunk.agents, chunk.part, table)
+        return ChunkReport(chunk.key, len(chunk.episode_ids), steps_total, tuple(failures),
+                           time.perf_counter() - t0)
+
+    def close(self) -> None:
+        """Close the simulators and the policy process."""
+        for sim in self._sims.values():
+            sim.close()
+        self._sims.clear()
+        if self._policy is not None and hasattr(self._policy, "close"):
+            self._policy.close()
+        self._policy = None
+
+
+def trajectory_table(trace: EpisodeTrace) -> pa.Table:
+    """The trace as `TRAJECTORY_SCHEMA` rows (step-major, agent-minor)."""
+    steps, n = trace.actions.shape
+    return pa.Table.from_pydict(
+        {
+            "episode_id": [trace.episode_id] * (steps * n),
+            "step": np.repeat(np.arange(steps, dtype=np.int32), n),
+            "agent_index": np.tile(np.arange(n, dtype=np.int8), steps),
+            "action": trace.actions.reshape(-1).astype(np.int8),
+            "x": trace.positions[:, :, 0].reshape(-1).astype(np.float32),
+            "y": trace.positions[:, :, 1].reshape(-1).astype(np.float32),
+            "z": trace.positions[:, :, 2].reshape(-1).astype(np.float32),
+            "yaw": trace.yaws.reshape(-1).astype(np.float32),
+            "collided": trace.collided.reshape(-1),
+            "distance_to_goal": trace.distances.reshape(-1).astype(np.float32),
+        },
+        schema=TRAJECTORY_SCHEMA,
+    )

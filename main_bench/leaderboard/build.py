@@ -1,0 +1,81 @@
+"""`build_leaderboard`: results directories in, index.html + README.md + leaderboard.json + plots out."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import ResultsError
+from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from .evalai import leaderboard_json
+from .html import render_html
+from .markdown import render_markdown
+from .plots import section_figures
+from .report import LeaderboardReport, Section
+from .submissions import LoadedSubmission, group_by_dataset, load_submission
+from .tables import TableSettings, build_tables
+
+
+@dataclass(frozen=True)
+class LeaderboardSettings:
+    """Options of `build_leaderboard`: mixing data sets, plots on or off, and the bootstrap settings."""
+
+    allow_mixed: bool = False
+    plots: bool = True
+    tables: TableSettings = TableSettings()
+
+
+def build_sections(subs: list[LoadedSubmission], settings: LeaderboardSettings) -> list[Section]:
+    """Group submissions by data set and sensor track and compute each group's tables and plots."""
+    sections: list[Section] = []
+    for group in group_by_dataset(subs, settings.allow_mixed):
+        by_track: dict[str, list[LoadedSubmission]] = {}
+        for s in group:
+            by_track.setdefault(s.submission.sensor_track, []).append(s)
+        for sensor_track, members in by_track.items():
+            tracks, t2 = build_tables(members, settings.tables)
+            figures = section_figures(members, tracks, settings.tables) if settings.plots else ()
+            first = members[0].submission
+            sections.append(Section(
+                index=len(sections), manifest_hash=first.manifest_hash, dataset_path=first.dataset_path,
+                sensor_track=sensor_track, submissions=tuple(m.submission for m in members),
+                tracks=tuple(tracks), table2=tuple(t2), figures=tuple(figures)))
+    return sections
+
+
+def build_leaderboard(results_dirs: list[str | Path], out_dir: str | Path,
+                      settings: LeaderboardSettings | None = None) -> LeaderboardReport:
+    """Build the report of `results_dirs` into `out_dir`; every file is written atomically.
+
+    Raises ResultsError (exit 2) for a missing or malformed results directory, or for submissions scored on
+    different data sets unless `settings.allow_mixed`.
+    """
+    settings = settings or LeaderboardSettings()
+    if not results_dirs:
+        raise ResultsError("no results directories given; pass one or more folders written by main-bench evaluate")
+    seen: set[Path] = set()
+    subs = []
+    for d in results_dirs:
+        key = Path(d).resolve()
+        if key in seen:
+            raise ResultsError("results directory given twice; pass each once", path=d)
+        seen.add(key)
+        subs.append(load_submission(d))
+    sections = build_sections(subs, settings)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ResultsError("--out exists and is not a folder; choose a folder for the report", path=out)
+    figure_files: dict[tuple[int, str], str] = {}
+    figure_paths = []
+    for sec in sections:
+        for fig in sec.figures:
+            rel = f"plots/section{sec.index}_{fig.name}.png"
+            atomic_write_bytes(out / rel, fig.png)
+            figure_files[(sec.index, fig.name)] = rel
+            figure_paths.append(out / rel)
+    atomic_write_json(out / "leaderboard.json", leaderboard_json(sections, settings.tables))
+    atomic_write_text(out / "README.md", render_markdown(sections, settings.tables, figure_files))
+    atomic_write_text(out / "index.html", render_html(sections, settings.tables))
+    return LeaderboardReport(out_dir=out, index_html=out / "index.html", readme_md=out / "README.md",
+                             leaderboard_json=out / "leaderboard.json", figure_paths=tuple(figure_paths),
+                             sections=tuple(sections))

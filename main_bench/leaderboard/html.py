@@ -1,0 +1,135 @@
+"""The report as one self-contained HTML page: inline CSS, plots as base64 PNG, no script, no network.
+
+Everything user-supplied (names, descriptions, links, dates, paths) goes through `html.escape`; only
+http(s) links become anchors.
+"""
+
+from __future__ import annotations
+
+import base64
+from html import escape
+
+from .. import __version__
+from .format import fmt_estimate, metric_title, track_title
+from .report import Section
+from .submissions import Submission
+from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TableSettings, TrackTable
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2rem auto;max-width:1200px;
+padding:0 1rem;color:#1f2328;background:#fff}
+h1{font-size:1.7rem;margin-bottom:.2rem}h2{border-bottom:2px solid #d0d7de;padding-bottom:.3rem;margin-top:2.5rem}
+h3{margin-top:1.8rem}p.meta{color:#57606a;margin-top:0}
+table{border-collapse:collapse;margin:.6rem 0 1.2rem;font-size:.9rem}
+th,td{border:1px solid #d0d7de;padding:.3rem .55rem;text-align:right;vertical-align:top}
+th{background:#f6f8fa}td.name,th.name{text-align:left}tbody tr:nth-child(even){background:#fafbfc}
+tr.baseline td{color:#57606a;font-style:italic}
+.ci{display:block;color:#6e7781;font-size:.75rem;white-space:nowrap}
+.badge{display:inline-block;font-size:.7rem;font-style:normal;background:#ddf4ff;color:#0969da;border-radius:.6rem;
+padding:0 .45rem;margin-left:.35rem}
+figure{margin:1rem 0 2rem}figure img{max-width:100%;border:1px solid #d0d7de}
+figcaption{color:#57606a;font-size:.85rem}code{background:#f6f8fa;padding:0 .25rem}
+ul.subs li{margin-bottom:.4rem}
+"""
+
+
+def _name_cell(sub: Submission) -> str:
+    badge = '<span class="badge">baseline</span>' if sub.baseline else ""
+    return f'<td class="name">{escape(sub.name)}{badge}</td>'
+
+
+def _est_cell(metric: str, est) -> str:
+    mean, ci = fmt_estimate(metric, est)
+    return f'<td>{mean}<span class="ci">{ci}</span></td>'
+
+
+def track_html(table: TrackTable) -> str:
+    """One ranked track table."""
+    head = "".join(f"<th>{escape(metric_title(c, t))}</th>" for c, t in TRACK_METRICS)
+    rows = []
+    for e in table.entries:
+        cls = ' class="baseline"' if e.submission.baseline else ""
+        cells = "".join(_est_cell(col, e.metrics[col]) for col, _ in TRACK_METRICS)
+        rows.append(f"<tr{cls}><td>{e.rank}</td>{_name_cell(e.submission)}{cells}<td>{e.episodes}</td></tr>")
+    return (f"<h3>{escape(track_title(table.split, table.task, table.agents))}</h3>\n"
+            f'<table><thead><tr><th>#</th><th class="name">Method</th>{head}<th>Episodes</th></tr></thead>'
+            f"<tbody>{''.join(rows)}</tbody></table>")
+
+
+def table2_html(t2: Table2) -> str:
+    """MAIN Table 2: a column group per agent count."""
+    top = "".join(f'<th colspan="{len(TABLE2_METRICS)}">{n} agents</th>' for n in t2.agent_counts)
+    sub = "".join(f"<th>{escape(metric_title(c, t))}</th>" for _ in t2.agent_counts for c, t in TABLE2_METRICS)
+    rows = []
+    for s in t2.methods:
+        cells = []
+        for n in t2.agent_counts:
+            group = t2.cells.get(s.name, {}).get(n)
+            for col, _ in TABLE2_METRICS:
+                cells.append("<td>–</td>" if group is None else _est_cell(col, group[col]))
+        cls = ' class="baseline"' if s.baseline else ""
+        rows.append(f"<tr{cls}>{_name_cell(s)}{''.join(cells)}</tr>")
+    return (f"<h3>Table 2 shape: {escape(t2.split)} · {escape(t2.task)}-target</h3>\n"
+            f'<table><thead><tr><th class="name" rowspan="2">Method</th>{top}</tr><tr>{sub}</tr></thead>'
+            f"<tbody>{''.join(rows)}</tbody></table>")
+
+
+def _links(sub: Submission) -> str:
+    out = []
+    for url in sub.links:
+        if url.startswith(("http://", "https://")):
+            out.append(f'<a href="{escape(url, quote=True)}" rel="noopener noreferrer">{escape(url)}</a>')
+        else:
+            out.append(escape(url))
+    return " · ".join(out)
+
+
+def _submissions_html(section: Section) -> str:
+    items = []
+    for s in section.submissions:
+        badge = '<span class="badge">baseline</span>' if s.baseline else ""
+        parts = [f"<strong>{escape(s.name)}</strong>{badge}"]
+        if s.date:
+            parts.append(f" ({escape(s.date)})")
+        if s.description:
+            parts.append(f" — {escape(s.description)}")
+        links = _links(s)
+        if links:
+            parts.append(f"<br>{links}")
+        parts.append(f"<br><small>results: <code>{escape(str(s.results_dir))}</code></small>")
+        items.append(f"<li>{''.join(parts)}</li>")
+    return f'<ul class="subs">{"".join(items)}</ul>'
+
+
+def _section_html(section: Section) -> str:
+    parts = [f'<h2 id="section-{section.index}">{escape(section.title)}</h2>',
+             f'<p class="meta">Episodes: <code>{escape(section.dataset_path or "(path not recorded)")}</code>, '
+             f"manifest hash <code>{escape(section.manifest_hash)}</code></p>",
+             "<h3>Submissions</h3>", _submissions_html(section)]
+    parts += [track_html(t) for t in section.tracks]
+    parts += [table2_html(t) for t in section.table2]
+    for fig in section.figures:
+        data = base64.b64encode(fig.png).decode("ascii")
+        parts.append(f'<figure><img alt="{escape(fig.caption, quote=True)}" src="data:image/png;base64,{data}">'
+                     f"<figcaption>{escape(fig.caption)}</figcaption></figure>")
+    return "\n".join(parts)
+
+
+def render_html(sections: list[Section], settings: TableSettings) -> str:
+    """The whole page."""
+    note = (f"Each cell: team mean over episodes and its {settings.level:.0%} bootstrap confidence interval "
+            f"({settings.n_resamples} resamples, seed {settings.seed}). Tracks are ranked by team SPL. "
+            "Success, SPL and soft SPL in percent; distance to goal in metres; episode length in steps.")
+    warn = ""
+    if len(sections) > 1:
+        warn = ('<p class="meta"><strong>These submissions were scored on different data sets or sensor tracks; '
+                "each section is ranked on its own and numbers must not be compared across sections.</strong></p>")
+    body = "\n".join(_section_html(s) for s in sections)
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        f"<title>MAIN leaderboard</title><style>{_CSS}</style></head><body>\n"
+        "<h1>MAIN benchmark leaderboard</h1>\n"
+        f'<p class="meta">Multi-Agent Indoor Navigation · built by main-bench {escape(__version__)}</p>\n'
+        f"<p>{escape(note)}</p>\n{warn}\n{body}\n</body></html>\n"
+    )

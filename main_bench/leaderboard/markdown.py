@@ -1,0 +1,87 @@
+"""The report as Markdown (README.md): the same tables as the HTML page, without the plots."""
+
+from __future__ import annotations
+
+from .format import fmt_estimate, metric_title, track_title
+from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
+
+
+def md_escape(text: str) -> str:
+    """Escape text for a Markdown table cell: pipes, HTML brackets, backslashes and newlines."""
+    out = text.replace("\\", "\\\\").replace("|", "\\|").replace("<", "&lt;").replace(">", "&gt;")
+    for ch in "*_`[]":
+        out = out.replace(ch, "\\" + ch)
+    return " ".join(out.split())
+
+
+def _name(sub) -> str:
+    return md_escape(sub.name) + (" *(baseline)*" if sub.baseline else "")
+
+
+def track_markdown(table: TrackTable) -> str:
+    """One track table: rank, method, each metric as `mean [lo, hi]`, episode count."""
+    head = ["#", "Method"] + [metric_title(c, t) for c, t in TRACK_METRICS] + ["Episodes"]
+    lines = [f"### {track_title(table.split, table.task, table.agents)}", "",
+             "| " + " | ".join(head) + " |", "|" + "|".join(["---:", ":---"] + ["---:"] * (len(head) - 2)) + "|"]
+    for e in table.entries:
+        cells = [str(e.rank), _name(e.submission)]
+        for col, _ in TRACK_METRICS:
+            mean, ci = fmt_estimate(col, e.metrics[col])
+            cells.append(f"{mean} {ci}")
+        cells.append(str(e.episodes))
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def table2_markdown(t2: Table2) -> str:
+    """MAIN Table 2: one column group per agent count (Length, Distance, Success rate, SPL)."""
+    head = ["Method"] + [f"{n} agents: {metric_title(c, t)}" for n in t2.agent_counts for c, t in TABLE2_METRICS]
+    lines = [f"### Table 2 shape: {t2.split} · {t2.task}-target", "",
+             "| " + " | ".join(head) + " |", "|" + "|".join([":---"] + ["---:"] * (len(head) - 1)) + "|"]
+    for sub in t2.methods:
+        cells = [_name(sub)]
+        for n in t2.agent_counts:
+            group = t2.cells.get(sub.name, {}).get(n)
+            for col, _ in TABLE2_METRICS:
+                if group is None:
+                    cells.append("–")
+                else:
+                    mean, ci = fmt_estimate(col, group[col])
+                    cells.append(f"{mean} {ci}")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _submissions_markdown(section) -> str:
+    lines = []
+    for s in section.submissions:
+        text = f"- **{md_escape(s.name)}**" + (" *(baseline)*" if s.baseline else "")
+        if s.date:
+            text += f" ({md_escape(s.date)})"
+        if s.description:
+            text += f": {md_escape(s.description)}"
+        links = [f"<{u}>" for u in s.links if u.startswith(("http://", "https://")) and " " not in u and ">" not in u]
+        if links:
+            text += " " + " ".join(links)
+        lines.append(text)
+    return "\n".join(lines)
+
+
+def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]) -> str:
+    """README.md: the same tables as the HTML page, with links to the plot files written beside it."""
+    out = ["# MAIN benchmark leaderboard", "",
+           f"Each cell: team mean over episodes and its {settings.level:.0%} bootstrap confidence interval "
+           f"`[low, high]` ({settings.n_resamples} resamples, seed {settings.seed}). Tracks are ranked by team SPL. "
+           "Success, SPL and soft SPL in percent; distance to goal in metres; episode length in steps.", ""]
+    if len(sections) > 1:
+        out += ["**These submissions were scored on different data sets or sensor tracks; each section is "
+                "ranked on its own and numbers must not be compared across sections.**", ""]
+    for sec in sections:
+        out += [f"## {md_escape(sec.title)}", "",
+                f"Episodes: `{sec.dataset_path or '(path not recorded)'}`, manifest hash `{sec.manifest_hash}`", "",
+                _submissions_markdown(sec), ""]
+        out += [track_markdown(t) + "\n" for t in sec.tracks]
+        out += [table2_markdown(t) + "\n" for t in sec.table2]
+        for fig in sec.figures:
+            out += [f"![{md_escape(fig.caption)}]({figure_files[(sec.index, fig.name)]})", ""]
+    return "\n".join(out).rstrip() + "\n"

@@ -1,0 +1,53 @@
+"""The report's data model: sections (one per data set and sensor track), figures and the built report."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from .submissions import Submission
+from .tables import Table2, TrackTable
+
+#: Version of leaderboard.json; bumped when a key changes meaning or goes away.
+LEADERBOARD_SCHEMA_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One plot of the report: a file name stem, a caption and the PNG bytes."""
+
+    name: str
+    caption: str
+    png: bytes
+
+
+@dataclass(frozen=True)
+class Section:
+    """Submissions scored on the same data set (manifest hash) and sensor track, with their tables and plots."""
+
+    index: int
+    manifest_hash: str
+    dataset_path: str
+    sensor_track: str
+    submissions: tuple[Submission, ...]
+    tracks: tuple[TrackTable, ...]
+    table2: tuple[Table2, ...]
+    figures: tuple[Figure, ...]
+
+    @property
+    def title(self) -> str:
+        """Heading naming the data set (short hash) and the sensor track."""
+        track = f" · {self.sensor_track} track" if self.sensor_track else ""
+        return f"Data set {self.manifest_hash[:12]}{track}"
+
+
+@dataclass(frozen=True)
+class LeaderboardReport:
+    """What `build_leaderboard` wrote: the three report files, the plot files and the sections."""
+
+    out_dir: Path
+    index_html: Path
+    readme_md: Path
+    leaderboard_json: Path
+    figure_paths: tuple[Path, ...]
+    sections: tuple[Section, ...]

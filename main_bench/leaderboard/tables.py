@@ -1,0 +1,162 @@
+"""Leaderboard tables: per-track rankings with bootstrap intervals, and the MAIN paper's Table 2 shape.
+
+A track is one (split, task, number of agents). Every number is a mean over the episodes' team records with
+its 95% bootstrap confidence interval (`main_bench.evaluation.metrics.bootstrap_ci`, seeded).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+import pandas as pd
+
+from .submissions import LoadedSubmission, Submission
+
+#: Team metrics shown per track: (record column, column title).
+TRACK_METRICS: tuple[tuple[str, str], ...] = (
+    ("success", "Success"),
+    ("spl", "SPL"),
+    ("soft_spl", "Soft SPL"),
+    ("distance_to_goal", "Distance to goal (m)"),
+    ("steps", "Episode length (steps)"),
+    ("collisions", "Collisions"),
+)
+#: The MAIN paper's Table 2 columns per agent count: (record column, title).
+TABLE2_METRICS: tuple[tuple[str, str], ...] = (
+    ("steps", "Length"),
+    ("distance_to_goal", "Distance"),
+    ("success", "Success rate"),
+    ("spl", "SPL"),
+)
+
+
+@dataclass(frozen=True)
+class TableSettings:
+    """How intervals are computed: bootstrap resamples, confidence level and seed."""
+
+    seed: int = 0
+    n_resamples: int = 2000
+    level: float = 0.95
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A mean over episodes and its bootstrap confidence interval."""
+
+    mean: float
+    lo: float
+    hi: float
+
+
+@dataclass(frozen=True)
+class TrackEntry:
+    """One submission's row in a track table."""
+
+    submission: Submission
+    rank: int
+    episodes: int
+    metrics: Mapping[str, Estimate]
+
+
+@dataclass(frozen=True)
+class TrackTable:
+    """The ranked table of one track (split, task, agents), best team SPL first."""
+
+    split: str
+    task: str
+    agents: int
+    entries: tuple[TrackEntry, ...]
+
+    @property
+    def key(self) -> str:
+        """`<split>/<task>/<agents>`, the key summary.json and leaderboard.json use."""
+        return f"{self.split}/{self.task}/{self.agents}"
+
+
+@dataclass(frozen=True)
+class Table2:
+    """MAIN Table 2 for one (split, task): methods as rows, one column group per agent count.
+
+    `cells[name][agents][metric]` is an Estimate, or absent where the method was not scored on that track.
+    """
+
+    split: str
+    task: str
+    agent_counts: tuple[int, ...]
+    methods: tuple[Submission, ...]
+    cells: Mapping[str, Mapping[int, Mapping[str, Estimate]]]
+
+
+def estimate(values: np.ndarray, settings: TableSettings) -> Estimate:
+    """Mean and bootstrap interval of `values` (the shared `bootstrap_ci`, seeded by `settings.seed`)."""
+    from ..evaluation.metrics import bootstrap_ci
+
+    mean, lo, hi = bootstrap_ci(np.asarray(values, dtype=np.float64), seed=settings.seed,
+                                n_resamples=settings.n_resamples, level=settings.level)
+    return Estimate(float(mean), float(lo), float(hi))
+
+
+def track_keys(subs: list[LoadedSubmission]) -> list[tuple[str, str, int]]:
+    """Every (split, task, agents) any submission has team records for, sorted."""
+    keys: set[tuple[str, str, int]] = set()
+    for s in subs:
+        t = s.teams
+        keys.update(zip(t["split"], t["task"], t["agents"].astype(int), strict=True))
+    return sorted(keys, key=lambda k: (k[0], k[1], k[2]))
+
+
+def _metrics_of(team: pd.DataFrame, columns: tuple[tuple[str, str], ...], settings: TableSettings
+                ) -> dict[str, Estimate]:
+    return {col: estimate(team[col].to_numpy(), settings) for col, _ in columns}
+
+
+def track_table(subs: list[LoadedSubmission], split: str, task: str, agents: int,
+                settings: TableSettings) -> TrackTable:
+    """Rank the submissions scored on one track by team SPL (then success, then name); ties share a rank."""
+    rows = []
+    for s in subs:
+        t = s.teams
+        team = t[(t["split"] == split) & (t["task"] == task) & (t["agents"] == agents)]
+        if team.empty:
+            continue
+        rows.append((s.submission, len(team), _metrics_of(team, TRACK_METRICS, settings)))
+    rows.sort(key=lambda r: (-r[2]["spl"].mean, -r[2]["success"].mean, r[0].name))
+    entries: list[TrackEntry] = []
+    for i, (sub, n, metrics) in enumerate(rows):
+        rank = i + 1
+        if entries:
+            prev = entries[-1]
+            if (prev.metrics["spl"].mean, prev.metrics["success"].mean) == (metrics["spl"].mean,
+                                                                            metrics["success"].mean):
+                rank = prev.rank
+        entries.append(TrackEntry(sub, rank, n, MappingProxyType(metrics)))
+    return TrackTable(split, task, agents, tuple(entries))
+
+
+def table2(subs: list[LoadedSubmission], split: str, task: str, tracks: list[TrackTable],
+           settings: TableSettings) -> Table2:
+    """MAIN Table 2 for one split and task; methods ordered by their rank on the largest team size."""
+    mine = [t for t in tracks if t.split == split and t.task == task]
+    counts = tuple(sorted({t.agents for t in mine}))
+    order: list[Submission] = []
+    for t in sorted(mine, key=lambda t: -t.agents):
+        for e in t.entries:
+            if e.submission not in order:
+                order.append(e.submission)
+    cells: dict[str, dict[int, Mapping[str, Estimate]]] = {}
+    for t in mine:
+        for e in t.entries:
+            cells.setdefault(e.submission.name, {})[t.agents] = MappingProxyType(
+                {col: e.metrics[col] for col, _ in TABLE2_METRICS})
+    return Table2(split, task, counts, tuple(order),
+                  MappingProxyType({k: MappingProxyType(v) for k, v in cells.items()}))
+
+
+def build_tables(subs: list[LoadedSubmission], settings: TableSettings) -> tuple[list[TrackTable], list[Table2]]:
+    """All track tables of one data set's submissions, and one Table 2 per (split, task)."""
+    tracks = [track_table(subs, *k, settings) for k in track_keys(subs)]
+    pairs = sorted({(t.split, t.task) for t in tracks})
+    return tracks, [table2(subs, split, task, tracks, settings) for split, task in pairs]

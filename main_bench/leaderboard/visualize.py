@@ -1,0 +1,142 @@
+"""Top-down picture of an evaluated episode, as in the MAIN paper's Fig. 6.
+
+Yellow circles: the agents' starts. Red flags: the targets. Green: shortest paths start -> target. Blue, one
+shade per agent: the paths walked. Red crosses: where an agent that failed stopped. Grey: navigable cells.
+"""
+
+from __future__ import annotations
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+
+from .episode_view import EpisodeView  # noqa: E402
+
+
+def agent_blues(n: int) -> list[tuple]:
+    """One shade of blue per agent, dark to light."""
+    cmap = plt.get_cmap("Blues")
+    return [cmap(v) for v in np.linspace(0.95, 0.5, max(n, 1))][:n]
+
+
+def occupancy(view: EpisodeView) -> tuple[np.ndarray, tuple[float, float, float, float]] | None:
+    """(ny, nx) image of the navigable cells on the episode's start floor and its extent, or None."""
+    nav = view.navmesh
+    if nav is None:
+        return None
+    x0, y0, cs, nx, ny = nav.grid_shape()
+    ix, iy = nav.cell_indices()
+    keep = np.ones(len(ix), dtype=bool)
+    if len(getattr(nav, "floors", ())) > 1:
+        keep = nav.cell_floor() == view.episode.start_floors[0]
+    img = np.zeros((ny, nx), dtype=np.float32)
+    img[iy[keep], ix[keep]] = 1.0
+    return img, (x0, x0 + nx * cs, y0, y0 + ny * cs)
+
+
+def view_bounds(view: EpisodeView, margin: float = 1.0) -> tuple[float, float, float, float]:
+    """(xmin, xmax, ymin, ymax) covering the map, starts, targets and paths, plus a margin."""
+    pts = [view.episode.start_positions[:, :2], view.episode.target_positions[:, :2]]
+    pts += [p[:, :2] for p in view.paths_walked if len(p)]
+    pts += [p[:, :2] for p in view.shortest_paths if p is not None]
+    if view.navmesh is not None:
+        c = view.navmesh.cells()
+        pts.append(c[:, :2])
+    allp = np.concatenate(pts)
+    (x0, y0), (x1, y1) = allp.min(0) - margin, allp.max(0) + margin
+    return float(x0), float(x1), float(y0), float(y1)
+
+
+def _flag(ax, x: float, y: float, size: float, label: str | None = None) -> None:
+    ax.plot([x, x], [y, y + size], color="#7f0000", linewidth=1.6, zorder=6, solid_capstyle="butt")
+    ax.fill([x, x + 0.7 * size, x], [y + size, y + 0.78 * size, y + 0.56 * size], color="#e00000", zorder=6)
+    if label:
+        ax.text(x + 0.75 * size, y + 0.8 * size, label, fontsize=7, color="#7f0000", zorder=7)
+
+
+def draw_episode(ax, view: EpisodeView, upto_step: int | None = None) -> None:
+    """Draw the episode's map on `ax`; with `upto_step`, only the walked paths up to that step."""
+    ep = view.episode
+    n = ep.num_agents
+    x0, x1, y0, y1 = view_bounds(view)
+    occ = occupancy(view)
+    if occ is not None:
+        img, extent = occ
+        ax.imshow(img, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=3.5, interpolation="nearest",
+                  zorder=0)
+    blues = agent_blues(n)
+    size = 0.05 * max(x1 - x0, y1 - y0)
+    for path in view.shortest_paths:
+        if path is not None:
+            ax.plot(path[:, 0], path[:, 1], color="#2ca02c", linewidth=2.2, alpha=0.85, zorder=2)
+    for i, walked in enumerate(view.paths_walked):
+        w = walked if upto_step is None else walked[: upto_step + 1]
+        if len(w):
+            ax.plot(w[:, 0], w[:, 1], color=blues[i], linewidth=2.0, zorder=3)
+    shared = ep.task == "shared" or np.allclose(ep.target_positions, ep.target_positions[0])
+    targets = ep.target_positions[:1] if shared else ep.target_positions
+    for k, t in enumerate(targets):
+        _flag(ax, t[0], t[1], size, None if shared else f"T{k}")
+    for i, s in enumerate(ep.start_positions):
+        ax.scatter([s[0]], [s[1]], s=90, color="#ffd400", edgecolors="black", linewidths=0.8, zorder=5)
+        ax.text(s[0], s[1], str(i), fontsize=6, ha="center", va="center", zorder=6)
+    done = upto_step is None or all(upto_step >= len(w) - 1 for w in view.paths_walked)
+    if done:
+        for i in view.failed_agents:
+            if i < len(view.paths_walked) and len(view.paths_walked[i]):
+                e = view.paths_walked[i][-1]
+                ax.scatter([e[0]], [e[1]], marker="x", s=110, color="#d00000", linewidths=2.6, zorder=7)
+    elif upto_step is not None:
+        for i, walked in enumerate(view.paths_walked):
+            if len(walked):
+                p = walked[min(upto_step, len(walked) - 1)]
+                ax.scatter([p[0]], [p[1]], s=30, color=blues[i], edgecolors="white", linewidths=0.8, zorder=6)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+
+
+def legend_handles(n: int) -> list[Line2D]:
+    """Legend entries of the picture's symbols."""
+    blues = agent_blues(n)
+    return [
+        Line2D([], [], marker="o", linestyle="", markerfacecolor="#ffd400", markeredgecolor="black",
+               markersize=8, label="start"),
+        Line2D([], [], marker=">", linestyle="", color="#e00000", markersize=8, label="target"),
+        Line2D([], [], color="#2ca02c", linewidth=2.2, label="shortest path"),
+        *[Line2D([], [], color=blues[i], linewidth=2.0, label=f"agent {i} walked") for i in range(n)],
+        Line2D([], [], marker="x", linestyle="", color="#d00000", markersize=9, markeredgewidth=2.4,
+               label="failed agent stopped"),
+    ]
+
+
+def episode_title(view: EpisodeView) -> str:
+    """`<episode> · <scene> · <task>, N agents · team success / SPL · submission`."""
+    ep, team = view.episode, view.team_record
+    verdict = "success" if float(team["success"]) >= 0.5 else "failure"
+    return (f"{ep.episode_id} · {ep.scene_id} · {ep.task}-target, {ep.num_agents} agents\n"
+            f"{view.submission}: team {verdict}, SPL {float(team['spl']):.2f}, {int(team['steps'])} steps "
+            f"({view.note})")
+
+
+def episode_png(view: EpisodeView, dpi: int = 120) -> bytes:
+    """The episode's top-down picture as PNG bytes."""
+    x0, x1, y0, y1 = view_bounds(view)
+    aspect = (y1 - y0) / max(x1 - x0, 1e-6)
+    fig, ax = plt.subplots(figsize=(7.5, max(3.5, min(12.0, 6.0 * aspect)) + 0.9))
+    draw_episode(ax, view)
+    ax.set_title(episode_title(view), fontsize=9)
+    ax.legend(handles=legend_handles(view.episode.num_agents), fontsize=7, loc="upper left",
+              bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight", metadata={"Software": None})
+    plt.close(fig)
+    return buf.getvalue()

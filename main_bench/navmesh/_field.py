@@ -1,0 +1,306 @@
+"""Numba kernels for any-angle distance fields ("source propagation") and point look-ups.
+
+Every reached node v keeps an anchor s(v): a target or a corner node that v sees in a straight line, and
+g(v) = D(s) + |v - s| (3D, with smoothed heights). Anchors are numbered 0..N-1 for nodes, N+j for target j.
+Visibility is decided by induction: v sees s if its neighbour w one step towards s is linked, settled,
+(both neighbours bracketing the direction to s, if it lies between two) anchored at s (or is s), and the heights along the way stay within `ztol` of one straight line (a slope
+interval [klo, khi] carried from node to node), so lines do not cut through floors, stairs or ramps.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._graph import _heap_pop, _heap_push
+
+
+@njit(cache=True)
+def _anchor_pos(a, n, px, py, pz, tpos):
+    if a >= n:
+        return tpos[a - n, 0], tpos[a - n, 1], tpos[a - n, 2]
+    return px[a], py[a], pz[a]
+
+
+@njit(cache=True)
+def _bracket(dx, dy):
+    """The one or two directions (0..7: E, N, W, S, NE, NW, SW, SE) between which (dx, dy) points.
+
+    Returns (d1, d2) with d2 = -1 when (dx, dy) is along an axis or a diagonal.
+    """
+    ax = abs(dx)
+    ay = abs(dy)
+    tiny = 1e-9 * (ax + ay)
+    if dx > 0:
+        diag = 4 if dy > 0 else 7
+    else:
+        diag = 5 if dy > 0 else 6
+    if abs(ax - ay) <= tiny:
+        return diag, -1
+    if ax > ay:
+        orth = 0 if dx > 0 else 2
+        return orth, (-1 if ay <= tiny else diag)
+    orth = 1 if dy > 0 else 3
+    return orth, (-1 if ax <= tiny else diag)
+
+
+@njit(cache=True)
+def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol):
+    """Walk the cells the segment from node v's centre to (sx, sy, sz) crosses (goal = node of that point).
+
+    True when each crossed cell is linked to the previous one and its height stays within ztol of the line.
+    """
+    x = px[v]
+    y = py[v]
+    dx = sx - x
+    dy = sy - y
+    dz = sz - pz[v]
+    len2 = dx * dx + dy * dy
+    stepx = 1 if dx > 0 else -1
+    stepy = 1 if dy > 0 else -1
+    # parameter t in [0, 1] along the segment where the next x / y cell boundary is crossed
+    tdx = cs / abs(dx) if dx != 0 else np.inf
+    tdy = cs / abs(dy) if dy != 0 else np.inf
+    tmx = 0.5 * tdx
+    tmy = 0.5 * tdy
+    cur = v
+    limit = int(abs(dx) / cs + abs(dy) / cs) + 3
+    for _ in range(limit):
+        if cur == goal:
+            return True
+        tie = 1e-9 * (tmx + tmy) if np.isfinite(tmx + tmy) else 0.0
+        if abs(tmx - tmy) <= tie:
+            if stepx > 0:
+                d = 4 if stepy > 0 else 7
+            else:
+                d = 5 if stepy > 0 else 6
+            t = tmx
+            tmx += tdx
+            tmy += tdy
+        elif tmx < tmy:
+            d = 0 if stepx > 0 else 2
+            t = tmx
+            tmx += tdx
+        else:
+            d = 1 if stepy > 0 else 3
+            t = tmy
+            tmy += tdy
+        if t > 1.0 + 1e-9:
+            return cur == goal
+        cur = nbr[cur, d]
+        if cur < 0:
+            return False
+        # height of the line at the point nearest this cell's centre
+        tc = ((px[cur] - x) * dx + (py[cur] - y) * dy) / len2
+        tc = min(max(tc, 0.0), 1.0)
+        if abs(pz[cur] - (pz[v] + tc * dz)) > ztol:
+            return False
+    return cur == goal
+
+
+@njit(cache=True)
+def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64)):
+    """Multi-source any-angle Dijkstra. Returns (g, anchor) per node; anchor -1 where unreached."""
+    n = nbr.shape[0]
+    g = np.full(n, np.inf)
+    anchor = np.full(n, -1, np.int64)
+    klo = np.full(n, -np.inf)
+    khi = np.full(n, np.inf)
+    done = np.zeros(n, np.bool_)
+    cap = n * 8 + tnode.shape[0] + 1
+    hk = np.empty(cap)
+    hv = np.empty(cap, np.int64)
+    size = 0
+    for j in range(tnode.shape[0]):
+        u = tnode[j]
+        if u < 0:
+            continue
+        dx = px[u] - tpos[j, 0]
+        dy = py[u] - tpos[j, 1]
+        dz = pz[u] - tpos[j, 2]
+        d = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if d < g[u]:
+            g[u] = d
+            anchor[u] = n + j
+            dh = np.sqrt(dx * dx + dy * dy)
+            if dh > 1e-9:
+                klo[u] = (dz - ztol) / dh
+                khi[u] = (dz + ztol) / dh
+            else:
+                klo[u] = -np.inf
+                khi[u] = np.inf
+            size = _heap_push(hk, hv, size, d, u)
+    while size > 0:
+        key, u, size = _heap_pop(hk, hv, size)
+        if done[u] or key > g[u]:
+            continue
+        done[u] = True
+        stats[3] += 1
+        s = anchor[u]
+        sx, sy, sz = _anchor_pos(s, n, px, py, pz, tpos)
+        ds = 0.0 if s >= n else g[s]
+        for d in range(8):
+            v = nbr[u, d]
+            if v < 0 or done[v]:
+                continue
+            best = g[v]
+            banchor = -1
+            blo = 0.0
+            bhi = 0.0
+            # 1. through u's anchor, if v sees it
+            hx = sx - px[v]
+            hy = sy - py[v]
+            hz = pz[v] - sz
+            dh = np.sqrt(hx * hx + hy * hy)
+            cand = ds + np.sqrt(dh * dh + hz * hz)
+            if dh > 1e-9 and cand < best:
+                d1, d2 = _bracket(hx, hy)
+                lo = (hz - ztol) / dh
+                hi = (hz + ztol) / dh
+                own = max(abs(hx), abs(hy)) <= 0.5 * cs * (1.0 + 1e-9)  # s lies in v's own cell
+                ok = True
+                blocked = False  # no need to walk the segment: it is blocked, or a later relaxation decides
+                if not own:
+                    for dd in (d1, d2):
+                        if dd < 0:
+                            continue
+                        w = nbr[v, dd]
+                        if w < 0:
+                            ok = False
+                            blocked = dd == d1  # the first cell the segment enters is not linked
+                            break
+                        if w != s and not done[w]:
+                            ok = False
+                            blocked = True  # w settles later and relaxes v again
+                            break
+                        if not (w == s or anchor[w] == s):
+                            ok = False
+                            break
+                        if w != s:
+                            lo = max(lo, klo[w])
+                            hi = min(hi, khi[w])
+                if not (ok and lo <= hi) and not blocked:
+                    # the cheap test fails near shadow edges and ties: walk the segment cell by cell
+                    goal = s if s < n else tnode[s - n]
+                    stats[0] += 1
+                    ok = _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol)
+                    stats[1] += int(dh / cs)
+                    stats[2] += ok
+                    lo = (hz - ztol) / dh
+                    hi = (hz + ztol) / dh
+                if ok and lo <= hi:
+                    best = cand
+                    banchor = s
+                    blo = lo
+                    bhi = hi
+            # 2. through u itself as a corner
+            ex = px[v] - px[u]
+            ey = py[v] - py[u]
+            ez = pz[v] - pz[u]
+            eh = np.sqrt(ex * ex + ey * ey)
+            c = g[u] + np.sqrt(eh * eh + ez * ez)
+            if c < best and banchor < 0:
+                best = c
+                banchor = u
+                blo = (ez - ztol) / eh
+                bhi = (ez + ztol) / eh
+            if banchor >= 0:
+                g[v] = best
+                anchor[v] = banchor
+                klo[v] = blo
+                khi[v] = bhi
+                size = _heap_push(hk, hv, size, best, v)
+    return g, anchor
+
+
+@njit(cache=True)
+def locate(points, x0, y0, cs, nx, ny, col_start, z, below, above):
+    """Node of each point: same column, surface within [p.z - above, p.z + below], nearest in height; -1 if none."""
+    m = points.shape[0]
+    out = np.full(m, -1, np.int64)
+    for i in range(m):
+        fx = (points[i, 0] - x0) / cs
+        fy = (points[i, 1] - y0) / cs
+        if not (fx >= 0.0 and fy >= 0.0 and fx < nx and fy < ny):
+            continue
+        c = int(fy) * nx + int(fx)
+        best = -1
+        bestdz = np.inf
+        pz = points[i, 2]
+        for v in range(col_start[c], col_start[c + 1]):
+            dz = z[v] - pz
+            if dz > below or -dz > above:
+                continue
+            if abs(dz) < bestdz:
+                bestdz = abs(dz)
+                best = v
+        out[i] = best
+    return out
+
+
+@njit(cache=True)
+def locate_near(points, nodes, x0, y0, cs, nx, ny, col_start, z, below, above, radius, allowed):
+    """For points with node -1, the nearest node (horizontally) within `radius` m on the same level.
+
+    `allowed[node]` restricts the candidates (e.g. to reached nodes or one island).
+    """
+    m = points.shape[0]
+    out = nodes.copy()
+    r = int(np.ceil(radius / cs))
+    for i in range(m):
+        if out[i] >= 0 and allowed[out[i]]:
+            continue
+        out[i] = -1
+        px = points[i, 0]
+        py = points[i, 1]
+        pz = points[i, 2]
+        if not (np.isfinite(px) and np.isfinite(py) and np.isfinite(pz)):
+            continue
+        cx = int(np.floor((px - x0) / cs))
+        cy = int(np.floor((py - y0) / cs))
+        best = -1
+        bestd = radius * radius
+        for jy in range(max(cy - r, 0), min(cy + r, ny - 1) + 1):
+            for jx in range(max(cx - r, 0), min(cx + r, nx - 1) + 1):
+                c = jy * nx + jx
+                if col_start[c] == col_start[c + 1]:
+                    continue
+                qx = min(max(px, x0 + jx * cs), x0 + (jx + 1) * cs) - px
+                qy = min(max(py, y0 + jy * cs), y0 + (jy + 1) * cs) - py
+                dd = qx * qx + qy * qy
+                if dd > bestd:
+                    continue
+                for v in range(col_start[c], col_start[c + 1]):
+                    dz = z[v] - pz
+                    if dz > below or -dz > above or not allowed[v]:
+                        continue
+                    if dd < bestd or best < 0:
+                        bestd = dd
+                        best = v
+        out[i] = best
+    return out
+
+
+@njit(cache=True)
+def lookup(points, nodes, g, anchor, px, py, pz, tpos, x0, y0, cs, ix, iy):
+    """Distance from each point through its node's anchor; inf for nodes -1 or unreached."""
+    m = points.shape[0]
+    n = g.shape[0]
+    out = np.full(m, np.inf)
+    for i in range(m):
+        v = nodes[i]
+        if v < 0:
+            continue
+        s = anchor[v]
+        if s < 0:
+            continue
+        # the point, clamped into its node's cell, at the node's (smoothed) height
+        qx = min(max(points[i, 0], x0 + ix[v] * cs), x0 + (ix[v] + 1) * cs)
+        qy = min(max(points[i, 1], y0 + iy[v] * cs), y0 + (iy[v] + 1) * cs)
+        sx, sy, sz = _anchor_pos(s, n, px, py, pz, tpos)
+        ds = 0.0 if s >= n else g[s]
+        dx = qx - sx
+        dy = qy - sy
+        dz = pz[v] - sz
+        out[i] = ds + np.sqrt(dx * dx + dy * dy + dz * dz)
+    return out

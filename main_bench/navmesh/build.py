@@ -1,0 +1,129 @@
+"""The build pipeline: triangles -> heightfield nodes -> links -> erosion -> islands -> floors."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import NavMeshError
+from . import _graph, _raster
+from .settings import NavMeshSettings
+
+#: Bumped whenever the build's output for the same inputs changes; part of the cache key.
+ALGORITHM_VERSION = 1
+#: Nodes are kept when their centre is at least agent_radius - ERODE_SLACK * cell_size from an obstacle
+#: cell: with cell-centre nodes this puts the wrap radius of paths around corners closest to agent_radius.
+ERODE_SLACK = 0.2
+#: Smoothing of node heights for distances (stairs -> ramps), in metres of Gaussian-like width.
+SMOOTH_WIDTH_M = 0.15
+
+
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """The node arrays of a navmesh (see `NavMesh`); node order is by column then height."""
+
+    x0: float
+    y0: float
+    cell_size: float
+    nx: int
+    ny: int
+    ix: np.ndarray  # (N,) int64 column x index
+    iy: np.ndarray  # (N,) int64 column y index
+    z: np.ndarray  # (N,) float64 surface height, m
+    zs: np.ndarray  # (N,) float64 smoothed height used for distances, m
+    nbr: np.ndarray  # (N, 8) int64 linked node per direction or -1
+    island: np.ndarray  # (N,) int64, 0 = largest island
+    col_start: np.ndarray  # (nx*ny + 1,) int64 CSR offsets of nodes per column
+
+
+def column_starts(ix: np.ndarray, iy: np.ndarray, nx: int, ny: int) -> np.ndarray:
+    """CSR offsets of nodes (sorted by column) per column."""
+    col = iy * nx + ix
+    counts = np.bincount(col, minlength=nx * ny)
+    out = np.zeros(nx * ny + 1, np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+def smooth_iterations(cell_size: float) -> int:
+    """Number of 3x3 averaging passes that give a smoothing width of about SMOOTH_WIDTH_M."""
+    return int(math.ceil(1.5 * (SMOOTH_WIDTH_M / cell_size) ** 2))
+
+
+def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> Grid:
+    """Build the node grid of a triangle soup (canonical frame, metres). Raises NavMeshError if empty."""
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    cs = float(s.cell_size)
+    lo = vertices.min(axis=0)
+    hi = vertices.max(axis=0)
+    x0 = math.floor(lo[0] / cs) * cs - cs
+    y0 = math.floor(lo[1] / cs) * cs - cs
+    nx = int(math.ceil((hi[0] - x0) / cs)) + 2
+    ny = int(math.ceil((hi[1] - y0) / cs)) + 2
+    min_nz = math.cos(math.radians(s.max_slope))
+    col, zlo, zhi, kind = _raster.rasterize(vertices, faces, x0, y0, cs, nx, ny, min_nz)
+    if not (kind == 1).any():
+        raise NavMeshError(f"no surface is flatter than max_slope={s.max_slope} degrees; "
+                           "is the up axis right (--up)? or raise --max-slope")
+    order = np.lexsort((zlo, col))
+    ncol, nz, nceil = _raster.make_nodes(col[order], zlo[order], zhi[order], kind[order],
+                                         float(s.cell_height), float(s.cell_height), float(s.agent_height))
+    if len(ncol) == 0:
+        raise NavMeshError(f"no walkable surface has agent_height={s.agent_height} m of free space above it; "
+                           "lower --agent-height")
+    ix = ncol % nx
+    iy = ncol // nx
+    col_start = column_starts(ix, iy, nx, ny)
+    nbr = _raster.link_nodes(col_start, ix, iy, nz, nceil, nx, ny, float(s.max_climb), float(s.agent_height))
+    nbr = _raster.diagonals(nbr)
+    if s.agent_radius > 0:
+        thr = (s.agent_radius - ERODE_SLACK * cs) / cs
+        dist = _graph.clearance(nbr, ix, iy, thr + 1.0)
+        keep = dist >= thr
+        if not keep.any():
+            raise NavMeshError(f"no walkable area is wide enough for agent_radius={s.agent_radius} m; "
+                               "lower --agent-radius")
+        nbr = _raster.diagonals(_graph.compact_links(nbr, keep))
+        ix, iy, nz = ix[keep], iy[keep], nz[keep]
+    label = _graph.components(nbr)
+    counts = np.bincount(label)
+    big = counts * cs * cs >= s.region_min_size
+    if not big.any():
+        raise NavMeshError(f"every walkable region is smaller than region_min_size={s.region_min_size} m^2; "
+                           "lower --region-min-size or --agent-radius")
+    keep = big[label]
+    if not keep.all():
+        nbr = _raster.diagonals(_graph.compact_links(nbr, keep))
+        ix, iy, nz, label = ix[keep], iy[keep], nz[keep], label[keep]
+    # islands numbered largest first; ties broken by first node (stable)
+    kept_labels = np.flatnonzero(big)
+    rank = np.argsort(-counts[kept_labels], kind="stable")
+    relabel = np.full(len(counts), -1, np.int64)
+    relabel[kept_labels[rank]] = np.arange(len(kept_labels))
+    island = relabel[label]
+    zs = _graph.smooth_heights(nbr, nz, smooth_iterations(cs))
+    return Grid(x0=float(x0), y0=float(y0), cell_size=cs, nx=nx, ny=ny, ix=ix, iy=iy, z=nz, zs=zs, nbr=nbr,
+                island=island, col_start=column_starts(ix, iy, nx, ny))
+
+
+def find_floors(z: np.ndarray, cell_area: float, s: NavMeshSettings) -> list[tuple[float, float]]:
+    """Floor levels (z, area m^2), lowest first: heights holding much flat area, agent_height apart or more."""
+    if len(z) == 0:
+        return []
+    bins = np.round(z / 0.05).astype(np.int64)
+    uniq, inv, counts = np.unique(bins, return_inverse=True, return_counts=True)
+    sums = np.bincount(inv, weights=z)
+    areas = counts * cell_area
+    total = areas.sum()
+    threshold = min(max(4.0, 0.02 * total), areas.max())
+    chosen: list[tuple[float, float]] = []
+    for k in np.argsort(-areas, kind="stable"):
+        if areas[k] < threshold:
+            break
+        zk = sums[k] / counts[k]
+        if all(abs(zk - zc) >= s.agent_height for zc, _ in chosen):
+            chosen.append((float(zk), float(areas[k])))
+    return sorted(chosen)

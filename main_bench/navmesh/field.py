@@ -1,0 +1,99 @@
+"""Distance fields: one any-angle propagation from target(s), then cheap distances and paths from any point."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from . import _field
+
+if TYPE_CHECKING:
+    from .navmesh import NavMesh
+
+#: Height tolerance (m) for straight lines of sight over smoothed heights (see `_field`).
+LINE_Z_TOLERANCE = 0.01
+#: Points off the navmesh are snapped to the nearest navigable cell within this horizontal distance (m).
+SNAP_RADIUS = 0.5
+
+
+class DistanceField:
+    """Geodesic distances (m) to the nearest of a set of targets, for any number of query points.
+
+    Build with `NavMesh.distance_field(targets)`. Points are (x, y, z) at the agent's feet, canonical frame.
+    """
+
+    def __init__(self, navmesh: NavMesh, targets: np.ndarray) -> None:
+        self.navmesh = navmesh
+        g = navmesh._grid
+        targets = np.atleast_2d(np.asarray(targets, dtype=np.float64))
+        if targets.ndim != 2 or targets.shape[1] != 3:
+            raise ValueError(f"targets must be (3,) or (M, 3), got shape {targets.shape}")
+        self.targets = targets
+        nodes = navmesh._nodes_of(targets, snap_radius=SNAP_RADIUS)
+        self.target_nodes = nodes
+        ok = nodes >= 0
+        safe = np.where(ok, nodes, 0)
+        tpos = np.empty_like(targets)
+        tpos[:, 0] = np.clip(targets[:, 0], g.x0 + g.ix[safe] * g.cell_size, g.x0 + (g.ix[safe] + 1) * g.cell_size)
+        tpos[:, 1] = np.clip(targets[:, 1], g.y0 + g.iy[safe] * g.cell_size, g.y0 + (g.iy[safe] + 1) * g.cell_size)
+        tpos[:, 2] = g.zs[safe]
+        self._tpos = np.ascontiguousarray(tpos)
+        self._tpos_surface = tpos.copy()
+        self._tpos_surface[:, 2] = g.z[safe]
+        self._g, self._anchor = _field.propagate(g.nbr, navmesh._px, navmesh._py, g.zs, nodes, self._tpos,
+                                                 LINE_Z_TOLERANCE, g.cell_size)
+
+    @property
+    def reachable_targets(self) -> np.ndarray:
+        """(M,) bool: which targets lie on (or within 0.5 m of) the navmesh."""
+        return self.target_nodes >= 0
+
+    def cell_distances(self) -> np.ndarray:
+        """(C,) geodesic distance (m) from each navigable cell centre (`NavMesh.cells()` order); inf if unreached."""
+        return self._g.copy()
+
+    def distance(self, points: np.ndarray) -> np.ndarray | float:
+        """Geodesic distance (m) from each point to the nearest target; inf where unreachable.
+
+        Accepts (3,) (returns a float) or (N, 3). Points up to 0.5 m off the navmesh horizontally (same level)
+        are snapped to the nearest navigable cell first.
+        """
+        pts = np.asarray(points, dtype=np.float64)
+        single = pts.ndim == 1
+        pts = np.ascontiguousarray(np.atleast_2d(pts))
+        nm = self.navmesh
+        g = nm._grid
+        nodes = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
+        d = _field.lookup(pts, nodes, self._g, self._anchor, nm._px, nm._py, g.zs, self._tpos, g.x0, g.y0,
+                          g.cell_size, g.ix, g.iy)
+        return float(d[0]) if single else d
+
+    def path(self, point: np.ndarray) -> np.ndarray:
+        """(K, 3) polyline from `point` to the nearest target (feet height on the surface); (0, 3) if unreachable."""
+        p = np.asarray(point, dtype=np.float64).reshape(1, 3)
+        nm = self.navmesh
+        g = nm._grid
+        node = int(nm._nodes_of(p, snap_radius=SNAP_RADIUS)[0])
+        if node < 0 or self._anchor[node] < 0:
+            return np.zeros((0, 3))
+        n = len(g.z)
+        cs = g.cell_size
+        start = np.array([
+            min(max(p[0, 0], g.x0 + g.ix[node] * cs), g.x0 + (g.ix[node] + 1) * cs),
+            min(max(p[0, 1], g.y0 + g.iy[node] * cs), g.y0 + (g.iy[node] + 1) * cs),
+            g.z[node],
+        ])
+        out = [start]
+        a = int(self._anchor[node])
+        while a < n:
+            out.append(np.array([nm._px[a], nm._py[a], g.z[a]]))
+            a = int(self._anchor[a])
+        out.append(self._tpos_surface[a - n])
+        return _dedupe(np.array(out))
+
+
+def _dedupe(path: np.ndarray) -> np.ndarray:
+    keep = np.ones(len(path), bool)
+    keep[1:] = np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-9
+    return path[keep]

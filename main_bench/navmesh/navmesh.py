@@ -1,0 +1,368 @@
+"""`NavMesh`: the walkable surface of a scene for one agent size, with islands, floors and geodesic queries."""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import NavMeshError
+from ..io import atomic_path
+from . import _field
+from .build import ALGORITHM_VERSION, Grid, build_grid, column_starts, find_floors
+from .field import SNAP_RADIUS, DistanceField
+from .settings import NavMeshSettings
+
+#: Version of the navmesh file layout.
+SCHEMA_VERSION = 1
+#: A point matches a surface at most this far above the point (m) ...
+_ABOVE_EXTRA = 0.05
+
+
+@dataclass(frozen=True)
+class Island:
+    """A connected walkable region. area in m^2 (horizontal projection); bounds in m, canonical frame."""
+
+    index: int
+    area: float
+    floor: int
+    bounds_min: tuple[float, float, float]
+    bounds_max: tuple[float, float, float]
+    cell_count: int
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return {"index": self.index, "area": round(self.area, 4), "floor": self.floor,
+                "bounds_min": [round(v, 4) for v in self.bounds_min],
+                "bounds_max": [round(v, 4) for v in self.bounds_max], "cell_count": self.cell_count}
+
+
+@dataclass(frozen=True)
+class Floor:
+    """A storey: index (0 = lowest), z = height of its floor surface (m), area of flat floor at that height (m^2)."""
+
+    index: int
+    z: float
+    area: float
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return {"index": self.index, "z": round(self.z, 4), "area": round(self.area, 4)}
+
+
+def geometry_hash(vertices: np.ndarray, faces: np.ndarray) -> str:
+    """SHA-256 of the canonical-frame triangles (so up-axis, scale and moves change it)."""
+    h = hashlib.sha256(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
+    return h.hexdigest()
+
+
+def build_key(geom_hash: str, settings: NavMeshSettings) -> str:
+    """Cache key: geometry, settings and algorithm version."""
+    doc = {"geometry": geom_hash, "settings": settings.to_json(), "algorithm": ALGORITHM_VERSION}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+
+
+class NavMesh:
+    """Walkable cells of a scene (a 2.5D grid of cell_size squares, several layers per column).
+
+    Points are (x, y, z) at the agent's feet in the canonical frame (+Z up, metres). A point matches the
+    surface in its column whose height is nearest, within max_climb + 5 cm above the point or agent_height
+    below it.
+    """
+
+    def __init__(self, grid: Grid, settings: NavMeshSettings, scene_id: str, scene_hash: str,
+                 geom_hash: str, floors: list[tuple[float, float]] | None = None) -> None:
+        self._grid = grid
+        self.settings = settings
+        self.scene_id = scene_id
+        self.scene_hash = scene_hash
+        self.geometry_hash = geom_hash
+        cs = grid.cell_size
+        self._px = grid.x0 + (grid.ix + 0.5) * cs
+        self._py = grid.y0 + (grid.iy + 0.5) * cs
+        self._below = settings.max_climb + _ABOVE_EXTRA
+        self._above = settings.agent_height
+        if floors is None:
+            floors = find_floors(grid.z, cs * cs, settings)
+        self.floors: tuple[Floor, ...] = tuple(Floor(i, z, a) for i, (z, a) in enumerate(floors))
+        self._floor_z = np.array([f.z for f in self.floors])
+        self.islands: tuple[Island, ...] = self._make_islands()
+        self._trees: dict[int, Any] = {}
+
+    # ----------------------------------------------------------------- building and files
+    @classmethod
+    def build(cls, scene: Any, settings: NavMeshSettings = NavMeshSettings()) -> NavMesh:
+        """Build the navmesh of a `Scene` (canonical frame). Raises NavMeshError naming the settings to change."""
+        grid = build_grid(scene.vertices, scene.faces, settings)
+        return cls(grid, settings, str(scene.scene_id), str(scene.content_hash),
+                   geometry_hash(scene.vertices, scene.faces))
+
+    @classmethod
+    def build_cached(cls, scene: Any, settings: NavMeshSettings, cache_dir: str | Path) -> NavMesh:
+        """Like `build`, reusing `cache_dir/<scene_id>-<key>.navmesh` keyed by geometry, settings, algorithm."""
+        key = build_key(geometry_hash(scene.vertices, scene.faces), settings)
+        path = Path(cache_dir) / f"{scene.scene_id}-{key[:20]}.navmesh"
+        if path.is_file():
+            try:
+                nm = cls.load(path)
+                if nm.build_key == key:
+                    return nm
+            except NavMeshError:
+                pass
+        nm = cls.build(scene, settings)
+        nm.save(path)
+        return nm
+
+    @property
+    def build_key(self) -> str:
+        """The cache key this navmesh was built under (geometry hash, settings, algorithm version)."""
+        return build_key(self.geometry_hash, self.settings)
+
+    def save(self, path: str | Path) -> None:
+        """Write the navmesh (compressed NumPy archive with a JSON header) atomically."""
+        g = self._grid
+        meta = {
+            "schema_version": SCHEMA_VERSION, "format": "main-bench-navmesh", "algorithm": ALGORITHM_VERSION,
+            "settings": self.settings.to_json(), "scene_id": self.scene_id, "scene_hash": self.scene_hash,
+            "geometry_hash": self.geometry_hash, "grid": {"x0": g.x0, "y0": g.y0, "cell_size": g.cell_size,
+                                                          "nx": g.nx, "ny": g.ny},
+            "floors": [[f.z, f.area] for f in self.floors],
+        }
+        buf = io.BytesIO()
+        np.savez_compressed(buf, meta=np.frombuffer(json.dumps(meta).encode(), np.uint8),
+                            ix=g.ix.astype(np.int32), iy=g.iy.astype(np.int32), z=g.z, zs=g.zs,
+                            nbr=g.nbr.astype(np.int32), island=g.island.astype(np.int32))
+        with atomic_path(path) as tmp:
+            tmp.write_bytes(buf.getvalue())
+
+    @classmethod
+    def load(cls, path: str | Path) -> NavMesh:
+        """Read a file written by `save`; a missing, foreign or newer file raises NavMeshError."""
+        path = Path(path)
+        if not path.is_file():
+            raise NavMeshError("navmesh file not found; build it with `main-bench navmesh build`", path=path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                arrays = {k: z[k] for k in z.files}
+            meta = json.loads(arrays["meta"].tobytes().decode())
+        except Exception as exc:
+            raise NavMeshError(f"not a main-bench navmesh file ({type(exc).__name__}); "
+                               "rebuild it with `main-bench navmesh build`", path=path) from None
+        if not isinstance(meta, dict) or meta.get("format") != "main-bench-navmesh":
+            raise NavMeshError("not a main-bench navmesh file; rebuild it with `main-bench navmesh build`", path=path)
+        version = meta.get("schema_version")
+        if not isinstance(version, int) or version > SCHEMA_VERSION:
+            raise NavMeshError(f"navmesh schema_version {version!r}; this main-bench reads up to {SCHEMA_VERSION}; "
+                               "upgrade main-bench or rebuild the navmesh", path=path)
+        try:
+            gm = meta["grid"]
+            ix = arrays["ix"].astype(np.int64)
+            iy = arrays["iy"].astype(np.int64)
+            nx, ny = int(gm["nx"]), int(gm["ny"])
+            grid = Grid(x0=float(gm["x0"]), y0=float(gm["y0"]), cell_size=float(gm["cell_size"]), nx=nx, ny=ny,
+                        ix=ix, iy=iy, z=arrays["z"].astype(np.float64), zs=arrays["zs"].astype(np.float64),
+                        nbr=arrays["nbr"].astype(np.int64), island=arrays["island"].astype(np.int64),
+                        col_start=column_starts(ix, iy, nx, ny))
+            settings = NavMeshSettings.from_json(meta["settings"])
+            nm = cls(grid, settings, str(meta["scene_id"]), str(meta["scene_hash"]), str(meta["geometry_hash"]),
+                     [(float(a), float(b)) for a, b in meta["floors"]])
+        except NavMeshError:
+            raise
+        except Exception as exc:
+            raise NavMeshError(f"corrupt navmesh file ({type(exc).__name__}: {exc}); rebuild it", path=path) from None
+        nm.algorithm_version = int(meta.get("algorithm", 0))
+        return nm
+
+    # ----------------------------------------------------------------- summary
+    def _make_islands(self) -> tuple[Island, ...]:
+        g = self._grid
+        if len(g.z) == 0:
+            return ()
+        k = int(g.island.max()) + 1
+        counts = np.bincount(g.island, minlength=k)
+        out = []
+        cs = g.cell_size
+        for i in range(k):
+            sel = g.island == i
+            xs, ys, zz = self._px[sel], self._py[sel], g.z[sel]
+            floor = int(self.floor_of(np.array([[0.0, 0.0, float(np.median(zz))]]))[0])
+            out.append(Island(i, float(counts[i] * cs * cs), floor,
+                              (float(xs.min() - cs / 2), float(ys.min() - cs / 2), float(zz.min())),
+                              (float(xs.max() + cs / 2), float(ys.max() + cs / 2), float(zz.max())),
+                              int(counts[i])))
+        return tuple(out)
+
+    @property
+    def navigable_area(self) -> float:
+        """Total walkable area, m^2 (horizontal projection)."""
+        return float(len(self._grid.z) * self._grid.cell_size ** 2)
+
+    @property
+    def cell_size(self) -> float:
+        """Grid cell size, m."""
+        return self._grid.cell_size
+
+    def info(self) -> dict[str, Any]:
+        """JSON-ready summary: settings, scene, area, floors, islands."""
+        return {"scene_id": self.scene_id, "scene_hash": self.scene_hash, "settings": self.settings.to_json(),
+                "navigable_area": round(self.navigable_area, 4), "cell_count": int(len(self._grid.z)),
+                "floors": [f.to_json() for f in self.floors], "islands": [i.to_json() for i in self.islands]}
+
+    # ----------------------------------------------------------------- grid accessors
+    def cells(self) -> np.ndarray:
+        """(C, 3) centres of navigable cells at surface height, m."""
+        return np.stack([self._px, self._py, self._grid.z], axis=1)
+
+    def cell_island(self) -> np.ndarray:
+        """(C,) island index of each cell (same order as `cells`)."""
+        return self._grid.island.copy()
+
+    def cell_floor(self) -> np.ndarray:
+        """(C,) floor index of each cell (same order as `cells`)."""
+        return self.floor_of(self.cells())
+
+    def cell_links(self) -> np.ndarray:
+        """(C, 8) linked cell per direction E, N, W, S, NE, NW, SW, SE, or -1 (for graph exports)."""
+        return self._grid.nbr.copy()
+
+    def grid_shape(self) -> tuple[float, float, float, int, int]:
+        """(x0, y0, cell_size, nx, ny): column (i, j) covers [x0 + i*cs, x0 + (i+1)*cs) x [y0 + j*cs, ...)."""
+        g = self._grid
+        return g.x0, g.y0, g.cell_size, g.nx, g.ny
+
+    def cell_indices(self) -> tuple[np.ndarray, np.ndarray]:
+        """(C,) column indices i, j of each cell."""
+        return self._grid.ix.copy(), self._grid.iy.copy()
+
+    # ----------------------------------------------------------------- point queries
+    def _points(self, points: np.ndarray) -> np.ndarray:
+        pts = np.asarray(points, dtype=np.float64)
+        if pts.ndim == 1:
+            pts = pts.reshape(1, -1)
+        if pts.ndim != 2 or pts.shape[1] != 3:
+            raise ValueError(f"points must be (3,) or (N, 3), got shape {np.shape(points)}")
+        return np.ascontiguousarray(pts)
+
+    def _locate(self, pts: np.ndarray) -> np.ndarray:
+        g = self._grid
+        return _field.locate(pts, g.x0, g.y0, g.cell_size, g.nx, g.ny, g.col_start, g.z, self._below, self._above)
+
+    def _nodes_of(self, pts: np.ndarray, snap_radius: float = 0.0, allowed: np.ndarray | None = None) -> np.ndarray:
+        """Node of each point; with snap_radius > 0, off-mesh points take the nearest node within it."""
+        pts = self._points(pts)
+        nodes = self._locate(pts)
+        if snap_radius > 0 and ((nodes < 0).any() or allowed is not None):
+            g = self._grid
+            if allowed is None:
+                allowed = np.ones(len(g.z), np.bool_)
+            nodes = _field.locate_near(pts, nodes, g.x0, g.y0, g.cell_size, g.nx, g.ny, g.col_start, g.z,
+                                       self._below, self._above, snap_radius, allowed)
+        return nodes
+
+    def is_navigable(self, points: np.ndarray) -> np.ndarray:
+        """(N,) bool: the point lies on a navigable cell (height within the matching tolerance)."""
+        return self._locate(self._points(points)) >= 0
+
+    def island_of(self, points: np.ndarray) -> np.ndarray:
+        """(N,) island index of each point, -1 where off the navmesh."""
+        nodes = self._locate(self._points(points))
+        return np.where(nodes >= 0, self._grid.island[np.maximum(nodes, 0)], -1)
+
+    def floor_of(self, points: np.ndarray) -> np.ndarray:
+        """(N,) floor index: the highest floor at most max_climb + 5 cm above the point; -1 below every floor."""
+        pts = self._points(points)
+        if len(self._floor_z) == 0:
+            return np.full(len(pts), -1, np.int64)
+        idx = np.searchsorted(self._floor_z, pts[:, 2] + self._below, side="right") - 1
+        return idx.astype(np.int64)
+
+    def snap(self, points: np.ndarray, island: int | None = None, max_distance: float = math.inf) -> np.ndarray:
+        """(N, 3) nearest navigable point (3D distance) to each point, optionally on one island; NaN rows where
+        nothing lies within max_distance (m)."""
+        pts = self._points(points)
+        g = self._grid
+        out = np.full_like(pts, np.nan)
+        nodes = self._locate(pts)
+        if island is not None:
+            self._check_island(island)
+            nodes = np.where((nodes >= 0) & (g.island[np.maximum(nodes, 0)] == island), nodes, -1)
+        on = nodes >= 0
+        tree, ids = self._tree(island)
+        if (~on).any() and len(ids):
+            bound = max_distance if math.isfinite(max_distance) else np.inf
+            dist, k = tree.query(pts[~on], distance_upper_bound=bound + g.cell_size)
+            found = np.isfinite(dist)
+            sub = np.full(len(k), -1, np.int64)
+            sub[found] = ids[k[found]]
+            nodes[~on] = sub
+        ok = nodes >= 0
+        n = nodes[ok]
+        cs = g.cell_size
+        out[ok, 0] = np.clip(pts[ok, 0], g.x0 + g.ix[n] * cs, g.x0 + (g.ix[n] + 1) * cs - 1e-9)
+        out[ok, 1] = np.clip(pts[ok, 1], g.y0 + g.iy[n] * cs, g.y0 + (g.iy[n] + 1) * cs - 1e-9)
+        out[ok, 2] = g.z[n]
+        far = np.linalg.norm(out - pts, axis=1) > max_distance
+        out[far] = np.nan
+        return out
+
+    def _check_island(self, island: int) -> None:
+        if not 0 <= int(island) < len(self.islands):
+            raise NavMeshError(f"island {island} does not exist; this navmesh has islands 0..{len(self.islands) - 1}")
+
+    def _tree(self, island: int | None) -> tuple[Any, np.ndarray]:
+        key = -1 if island is None else int(island)
+        if key not in self._trees:
+            from scipy.spatial import cKDTree
+
+            ids = np.arange(len(self._grid.z)) if island is None else np.flatnonzero(self._grid.island == island)
+            self._trees[key] = (cKDTree(self.cells()[ids]), ids)
+        return self._trees[key]
+
+    def sample(self, n: int, rng: np.random.Generator, island: int | None = None) -> np.ndarray:
+        """(n, 3) points uniform over the navigable area (of one island if given), at surface height."""
+        g = self._grid
+        if island is None:
+            ids = np.arange(len(g.z))
+        else:
+            self._check_island(island)
+            ids = np.flatnonzero(g.island == island)
+        pick = ids[rng.integers(0, len(ids), size=int(n))]
+        off = rng.random((int(n), 2))
+        cs = g.cell_size
+        return np.stack([g.x0 + (g.ix[pick] + off[:, 0]) * cs, g.y0 + (g.iy[pick] + off[:, 1]) * cs, g.z[pick]],
+                        axis=1)
+
+    # ----------------------------------------------------------------- geodesics
+    def distance_field(self, targets: np.ndarray) -> DistanceField:
+        """Distances to the nearest of targets (3,) or (M, 3), computed once for any number of look-ups.
+
+        Targets up to 0.5 m off the navmesh are snapped to the nearest navigable cell on their level.
+        """
+        return DistanceField(self, self._points(targets))
+
+    def geodesic_distance(self, a: np.ndarray, b: np.ndarray) -> float | np.ndarray:
+        """Geodesic distance (m) from a to b: (3,) and (3,) -> float; (N, 3) and (3,) -> (N,); (N, 3) and
+        (N, 3) -> (N,) row by row. inf when unreachable."""
+        a_arr = np.asarray(a, dtype=np.float64)
+        b_arr = np.asarray(b, dtype=np.float64)
+        if b_arr.ndim == 1:
+            return self.distance_field(b_arr).distance(a_arr)
+        a2 = self._points(a_arr)
+        b2 = self._points(b_arr)
+        if len(a2) != len(b2):
+            raise ValueError(f"a and b must have the same number of rows, got {len(a2)} and {len(b2)}")
+        return np.array([self.distance_field(bb).distance(aa) for aa, bb in zip(a2, b2, strict=True)])
+
+    def shortest_path(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(K, 3) polyline from a to b on the navigable surface; (0, 3) when unreachable."""
+        return self.distance_field(np.asarray(b, dtype=np.float64)).path(np.asarray(a, dtype=np.float64))
+
+
+__all__ = ["SNAP_RADIUS", "SCHEMA_VERSION", "Floor", "Island", "NavMesh"]

@@ -1,0 +1,85 @@
+"""The report page in headless Chromium: no console errors, a non-blank screenshot, hostile names as text."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import lb_fixtures
+import numpy as np
+import pytest
+from mb_testing import need
+from lb_fixtures import make_results
+from PIL import Image
+
+from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
+
+episodes_dir = lb_fixtures.episodes_dir
+three_results = lb_fixtures.three_results
+EVIL = "<script>alert(1)</script>"
+# Injected only into a probe copy of the page: records errors and alert() calls on the <html> element.
+PROBE = ("<script>window.addEventListener('error',function(e){var h=document.documentElement;"
+         "h.setAttribute('data-errors',(h.getAttribute('data-errors')||'')+e.message+';')});"
+         "window.alert=function(m){document.documentElement.setAttribute('data-alert',String(m))};</script>")
+
+
+def chromium(tmp: Path, *args: str) -> subprocess.CompletedProcess:
+    exe = shutil.which("chromium")
+    need(exe is not None, "the report test needs Debian's chromium (apt-get install chromium; .ci/run does)")
+    cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           f"--user-data-dir={tmp / 'chromium-profile'}", "--enable-logging=stderr", "--v=0", *args]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=90)
+
+
+def console_lines(stderr: str) -> list[str]:
+    return [line for line in stderr.splitlines() if ":CONSOLE" in line or "Uncaught" in line]
+
+
+def with_probe(page: Path, out: Path) -> Path:
+    text = page.read_text()
+    out.write_text(text.replace("<head>", "<head>" + PROBE, 1))
+    return out
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory, episodes_dir, three_results):
+    base = tmp_path_factory.mktemp("browser")
+    evil = make_results(base / "evil", episodes_dir, EVIL, 0.6, seed=4, description="<b>bold?</b> & co")
+    settings = LeaderboardSettings(tables=TableSettings(n_resamples=200))
+    return build_leaderboard([*three_results, evil], base / "lb", settings)
+
+
+def test_checks_catch_a_broken_page(tmp_path):
+    bad = tmp_path / "bad.html"
+    bad.write_text("<!DOCTYPE html><html><head></head><body><script>alert(5); nope();</script></body></html>")
+    res = chromium(tmp_path, "--dump-dom", with_probe(bad, tmp_path / "probe.html").as_uri())
+    html_tag = re.search(r"<html[^>]*>", res.stdout).group(0)
+    assert 'data-alert="5"' in html_tag and "nope is not defined" in html_tag
+    assert console_lines(res.stderr)
+
+
+def test_page_renders_without_console_errors(tmp_path, report):
+    shot = tmp_path / "shot.png"
+    res = chromium(tmp_path, f"--screenshot={shot}", "--window-size=1280,2000", report.index_html.as_uri())
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert console_lines(res.stderr) == [], console_lines(res.stderr)
+    img = np.asarray(Image.open(shot).convert("L"), dtype=np.float64)
+    assert img.shape == (2000, 1280)
+    assert img.std() > 10, "screenshot is blank"
+    # Text in the top band, and the plots (colour) further down are not all white either.
+    assert img[:300].std() > 5 and (img < 128).mean() > 0.01
+
+
+def test_hostile_submission_name_shows_as_text(tmp_path, report):
+    res = chromium(tmp_path, "--dump-dom", with_probe(report.index_html, tmp_path / "probe.html").as_uri())
+    assert res.returncode == 0, res.stderr[-2000:]
+    dom = res.stdout
+    html_tag = re.search(r"<html[^>]*>", dom).group(0)
+    assert "data-alert" not in html_tag and "data-errors" not in html_tag, html_tag
+    assert console_lines(res.stderr) == []
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in dom
+    assert "&lt;b&gt;bold?&lt;/b&gt; &amp; co" in dom
+    assert dom.count("<script") == 1  # only the probe

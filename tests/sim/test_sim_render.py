@@ -1,0 +1,205 @@
+"""Rendering: output format, z-depth at known distances, colours, textures, other agents, backend agreement,
+and the `auto` choice."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+from PIL import Image
+
+from main_bench.errors import InputError
+from main_bench.sim import CameraSettings, SimSettings, Simulator, check_render_output, make_renderer
+from main_bench.sim.render import gl as gl_backend
+from main_bench.sim.synthetic import box_house, room, scene_from_boxes
+from mb_testing import need
+
+CAM = CameraSettings()
+BACKENDS = ("gl", "tiny")
+
+
+def _gl_available() -> bool:
+    try:
+        r = gl_backend.GLRenderer(room(), CAM)
+    except gl_backend.GLUnavailable:
+        return False
+    r.close()
+    return True
+
+
+GL_OK = _gl_available()
+
+
+def _renderer(kind, scene, camera=CAM):
+    if kind == "gl":
+        need(GL_OK, "gl renderer needs EGL + Mesa (apt-get install libegl1 libgl1-mesa-dri) or a GPU driver")
+    return make_renderer(kind, scene, camera)
+
+
+def agreement(d1: np.ndarray, d2: np.ndarray, max_depth: float) -> float:
+    """Fraction of pixels with geometry in range in both where depths agree within 2%."""
+    valid = (d1 < max_depth) & (d2 < max_depth)
+    assert valid.mean() > 0.3
+    return float((np.abs(d1 - d2)[valid] <= 0.02 * d2[valid]).mean())
+
+
+@pytest.mark.parametrize("kind", BACKENDS)
+def test_wall_at_known_distance_and_output_format(kind):
+    r = _renderer(kind, room())
+    try:
+        # Agent 0 at x=4 faces the red +X wall (inner face x=6) 2 m away; agent 1 looks at the green +Y wall.
+        rgb, depth = r.render(np.array([[4.0, 2.0, 0.0], [3.0, 1.0, 0.0]]), np.array([0.0, math.pi / 2]))
+        assert check_render_output(rgb, depth, 2, CAM) == []
+        # z-depth: the whole wall facing the camera reads 2.0, at the centre and at the edges of the band.
+        band = depth[0, 40:88, :, 0]
+        assert np.all(np.abs(band - 2.0) <= 0.02 * 2.0), (band.min(), band.max())
+        assert depth[1, 64, 64, 0] == pytest.approx(3.0, rel=0.02)
+        red = rgb[0, 50:78, 50:78].reshape(-1, 3).mean(axis=0)
+        green = rgb[1, 50:78, 50:78].reshape(-1, 3).mean(axis=0)
+        assert red[0] > red[1] + 40 and red[0] > red[2] + 40
+        assert green[1] > green[0] + 40 and green[1] > green[2] + 40
+        # The floor is below the horizon, closer at the bottom of the image.
+        assert depth[0, 127, 64, 0] < depth[0, 120, 64, 0] < 2.0
+    finally:
+        r.close()
+
+
+@pytest.mark.parametrize("kind", BACKENDS)
+def test_nothing_in_range_reads_max_depth(kind):
+    far = scene_from_boxes([((30, -5, -5), (31, 5, 5), (255, 0, 0, 255))])
+    r = _renderer(kind, far, CameraSettings(width=32, height=24, max_depth=10.0))
+    try:
+        rgb, depth = r.render(np.zeros((1, 3)), np.zeros(1))
+        assert rgb.shape == (1, 24, 32, 3) and depth.shape == (1, 24, 32, 1)
+        assert np.all(depth == 10.0)
+    finally:
+        r.close()
+
+
+@pytest.mark.parametrize("kind", BACKENDS)
+def test_other_agents_visible_in_their_colours_never_self(kind):
+    r = _renderer(kind, room())
+    try:
+        feet = np.array([[2.0, 2.0, 0.0], [4.0, 2.0, 0.0], [1.0, 1.0, 0.0]])
+        rgb, depth = r.render(feet, np.array([0.0, math.pi, math.pi]))
+        # Agent 1 stands 2 m ahead of agent 0: its near surface is 2 - r away.
+        assert depth[0, 64, 64, 0] == pytest.approx(2.0 - 0.18, rel=0.02)
+        assert depth[1, 64, 64, 0] == pytest.approx(2.0 - 0.18, rel=0.02)
+        c1, c0 = rgb[0, 60:68, 62:66].mean(axis=(0, 1)), rgb[1, 60:68, 62:66].mean(axis=(0, 1))
+        assert np.abs(c1 - c0).max() > 30  # agents 0 and 1 differ in colour
+        # Agent 2 looks at the blue -X wall 1 m away, not at the inside of its own cylinder.
+        assert depth[2, 64, 64, 0] == pytest.approx(1.0, rel=0.02)
+    finally:
+        r.close()
+
+
+@pytest.mark.parametrize("scene_name", ["room", "box_house"])
+def test_backends_agree_on_synthetic_scenes(scene_name):
+    need(GL_OK, "gl renderer needs EGL + Mesa")
+    scene = room() if scene_name == "room" else box_house(0)
+    rng = np.random.default_rng(4)
+    lo, hi = scene.bounds[0, :2] + 0.5, scene.bounds[1, :2] - 0.5
+    with Simulator(scene, None, SimSettings(renderer="tiny")) as sim:  # poses where an agent fits
+        feet = [p for p in np.column_stack([rng.uniform(lo, hi, (40, 2)), np.zeros(40)])
+                if sim._world.penetration(p) == 0.0][:4]
+    yaws = rng.uniform(-math.pi, math.pi, len(feet))
+    g, t = make_renderer("gl", scene, CAM), make_renderer("tiny", scene, CAM)
+    try:
+        d1, d2 = g.render(feet, yaws)[1], t.render(feet, yaws)[1]
+    finally:
+        g.close(), t.close()
+    assert agreement(d1, d2, CAM.max_depth) >= 0.95
+
+
+@pytest.mark.parametrize("name", ["aws_small_house_collision_yup.glb", "aws_small_house_visual_yup.glb"])
+def test_backends_agree_on_real_house(real_scenes, name):
+    need(GL_OK, "gl renderer needs EGL + Mesa")
+    from main_bench.scenes.loader import load_scene
+
+    scene = load_scene(real_scenes / name)
+    feet = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [-2.0, 1.0, 0.0], [4.0, -2.0, 0.0]])
+    yaws = np.array([0.0, math.pi, 0.5, 2.0])
+    g, t = make_renderer("gl", scene, CAM), make_renderer("tiny", scene, CAM)
+    try:
+        (rgb1, d1), (rgb2, d2) = g.render(feet, yaws), t.render(feet, yaws)
+    finally:
+        g.close(), t.close()
+    assert agreement(d1, d2, CAM.max_depth) >= 0.95
+    assert rgb1.std() > 10 and rgb2.std() > 10
+
+
+def _textured_wall_scene():
+    """A floor and a wall at x=2 whose texture is red on its left half and blue on its right half."""
+    img = np.zeros((64, 64, 3), dtype=np.uint8)
+    img[:, :32] = (230, 20, 20)
+    img[:, 32:] = (20, 20, 230)
+    verts = np.array([[2.0, 2.0, -1.0], [2.0, -2.0, -1.0], [2.0, -2.0, 3.0], [2.0, 2.0, 3.0]])
+    uv = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    wall = trimesh.Trimesh(verts, [[0, 1, 2], [0, 2, 3]], process=False,
+                           visual=trimesh.visual.TextureVisuals(uv=uv, image=Image.fromarray(img)))
+    base = scene_from_boxes([((-3, -3, -0.1), (2, 3, 0.0), (128, 128, 128, 255))])
+    meshes = (*base.meshes, wall)
+    vertices = np.concatenate([m.vertices for m in meshes])
+    faces = np.concatenate([base.faces, wall.faces + len(base.vertices)])
+    from dataclasses import replace
+
+    return replace(base, meshes=meshes, vertices=vertices, faces=faces)
+
+
+def test_gl_samples_textures_and_tiny_averages_them():
+    need(GL_OK, "gl renderer needs EGL + Mesa")
+    scene = _textured_wall_scene()
+    feet, yaws = np.zeros((1, 3)), np.zeros(1)
+    g = make_renderer("gl", scene, CAM)
+    rgb = g.render(feet, yaws)[0][0]
+    g.close()
+    left, right = rgb[40:80, 10:50].reshape(-1, 3).mean(0), rgb[40:80, 78:118].reshape(-1, 3).mean(0)
+    assert left[0] > left[2] + 80 and right[2] > right[0] + 80  # texture halves seen where they are
+    t = make_renderer("tiny", scene, CAM)
+    rgb_t = t.render(feet, yaws)[0][0]
+    t.close()
+    # One colour per face, sampled at the face's UV centre: the two triangles (UV centres u=1/3 and u=2/3)
+    # come out red and blue, each uniform.
+    wall = rgb_t[20:100].reshape(-1, 3).astype(int)
+    reds = wall[(wall[:, 0] > wall[:, 2] + 80)]
+    blues = wall[(wall[:, 2] > wall[:, 0] + 80)]
+    assert len(reds) > 500 and len(blues) > 500
+    assert np.ptp(reds, axis=0).max() < 60 and np.ptp(blues, axis=0).max() < 60
+
+
+def test_auto_prefers_gl_and_falls_back_to_tiny(monkeypatch):
+    scene = room()
+    if GL_OK:
+        r = make_renderer("auto", scene, CAM)
+        assert r.name == "gl" and "auto" in r.reason
+        r.close()
+
+    def broken(*args, **kwargs):
+        raise gl_backend.GLUnavailable("no EGL display (test)")
+
+    monkeypatch.setattr(gl_backend, "GLRenderer", broken)
+    r = make_renderer("auto", scene, CAM)
+    assert r.name == "tiny" and "no EGL display (test)" in r.reason
+    r.close()
+    with pytest.raises(InputError, match="renderer gl is not available"):
+        make_renderer("gl", scene, CAM)
+    with pytest.raises(InputError, match="unknown renderer"):
+        make_renderer("vulkan", scene, CAM)
+
+
+@pytest.mark.parametrize("kind", BACKENDS)
+def test_simulator_observe_follows_the_agents(kind):
+    if kind == "gl":
+        need(GL_OK, "gl renderer needs EGL + Mesa")
+    settings = SimSettings(renderer=kind, camera=CameraSettings(width=64, height=48))
+    with Simulator(room(), None, settings) as sim:
+        sim.reset([[4.0, 2.0, 0.0], [1.0, 3.0, 0.0]], [0.0, 0.0])
+        assert sim.renderer_name == kind
+        rgb, depth = sim.observe()
+        assert check_render_output(rgb, depth, 2, settings.camera) == []
+        assert depth[0, 24, 32, 0] == pytest.approx(2.0, rel=0.02)
+        sim.step([1, None])
+        depth = sim.observe()[1]
+        assert depth[0, 24, 32, 0] == pytest.approx(1.75, rel=0.02)

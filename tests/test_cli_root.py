@@ -1,0 +1,46 @@
+"""The root command: help, version, error handling and the exit-code contract."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import main_bench
+
+
+def test_help_lists_every_stage(cli):
+    r = cli("--help")
+    assert r.code == 0
+    for group in ("scenes", "navmesh", "episodes", "evaluate", "leaderboard", "stats", "demo", "bench"):
+        assert group in r.out
+
+
+def test_version(cli):
+    r = cli("--version")
+    assert r.code == 0
+    assert r.out.strip() == f"main-bench {main_bench.__version__}"
+
+
+def test_bad_input_is_one_line_exit_2_without_traceback(tmp_path):
+    missing = tmp_path / "nope.glb"
+    proc = subprocess.run([sys.executable, "-m", "main_bench.cli.app", "scenes", "info", str(missing)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert str(missing) in lines[0] and "not found" in lines[0]
+    assert "Traceback" not in proc.stderr
+
+
+def test_debug_shows_the_traceback(tmp_path):
+    missing = tmp_path / "nope.glb"
+    proc = subprocess.run([sys.executable, "-m", "main_bench.cli.app", "--debug", "scenes", "info", str(missing)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode != 0
+    assert "Traceback" in proc.stderr and "SceneError" in proc.stderr
+
+
+def test_unknown_bench_area_is_bad_input(cli):
+    r = cli("bench", "nosuch", "--json")
+    assert r.code == 2
+    assert "nosuch" in r.err
