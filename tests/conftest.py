@@ -7,10 +7,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from mb_testing import need
 
 from main_bench.cli.app import main
-
-from mb_testing import need
 
 
 @dataclass

@@ -59,7 +59,9 @@ def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     try:
-        app(args=args, prog_name="main-bench", standalone_mode=False)
+        code = app(args=args, prog_name="main-bench", standalone_mode=False)
+        if isinstance(code, int) and code:  # click returns `typer.Exit(n)`'s code when not standalone
+            return code
     except click.exceptions.Exit as exc:
         return int(exc.exit_code or 0)
     except click.ClickException as exc:

@@ -105,6 +105,18 @@ class NavMesh:
                    geometry_hash(scene.vertices, scene.faces))
 
     @classmethod
+    def from_triangles(cls, vertices: np.ndarray, faces: np.ndarray,
+                       settings: NavMeshSettings = NavMeshSettings(), scene_id: str = "mesh") -> NavMesh:
+        """Build from a triangle soup already in the canonical frame (+Z up, metres): (V, 3) and (F, 3)."""
+        vertices = np.asarray(vertices, dtype=np.float64)
+        faces = np.asarray(faces, dtype=np.int64)
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3 or not len(faces):
+            raise NavMeshError(f"need (V, 3) vertices and a non-empty (F, 3) faces array, got {vertices.shape} "
+                               f"and {faces.shape}")
+        gh = geometry_hash(vertices, faces)
+        return cls(build_grid(vertices, faces, settings), settings, scene_id, gh, gh)
+
+    @classmethod
     def build_cached(cls, scene: Any, settings: NavMeshSettings, cache_dir: str | Path) -> NavMesh:
         """Like `build`, reusing `cache_dir/<scene_id>-<key>.navmesh` keyed by geometry, settings, algorithm."""
         key = build_key(geometry_hash(scene.vertices, scene.faces), settings)

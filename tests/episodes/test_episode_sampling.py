@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ep_scenes import box_room, furnished_room, l_corridor, write_scene, room_meshes
+from ep_scenes import box_room, furnished_room, l_corridor, room_meshes, write_scene
 
 from main_bench.episodes.goals import footprint_distance, goal_points, target_field
 from main_bench.episodes.sampler import sample_episodes

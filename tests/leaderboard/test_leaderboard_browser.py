@@ -10,8 +10,8 @@ from pathlib import Path
 import lb_fixtures
 import numpy as np
 import pytest
-from mb_testing import need
 from lb_fixtures import make_results
+from mb_testing import need
 from PIL import Image
 
 from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard

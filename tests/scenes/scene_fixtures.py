@@ -14,7 +14,7 @@ from main_bench.scenes.procedural import House, generate_house
 SEEDS = tuple(range(40))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def house(seed: int) -> House:
     """The house of `seed`, generated once per test process."""
     return generate_house(seed)

@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from mb_testing import need
 from PIL import Image
 
 from main_bench.errors import InputError
 from main_bench.sim import CameraSettings, SimSettings, Simulator, check_render_output, make_renderer
 from main_bench.sim.render import gl as gl_backend
 from main_bench.sim.synthetic import box_house, room, scene_from_boxes
-from mb_testing import need
 
 CAM = CameraSettings()
 BACKENDS = ("gl", "tiny")
