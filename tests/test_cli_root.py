@@ -44,3 +44,12 @@ def test_unknown_bench_area_is_bad_input(cli):
     r = cli("bench", "nosuch", "--json")
     assert r.code == 2
     assert "nosuch" in r.err
+
+
+def test_pybullet_banner_is_silenced():
+    # pybullet prints a banner on the C-level stderr when imported; an error must stay one line.
+    code = "from main_bench.cli.app import _import_pybullet_quietly as q; q(); print('ok')"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == "ok\n"
+    assert "pybullet build time" not in proc.stderr

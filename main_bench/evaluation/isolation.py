@@ -142,7 +142,7 @@ class PolicyProcess:
         if self._proc is None:
             return
         if self.alive and self._sock is not None:
-            with contextlib.suppress(OSError, EOFError, TimeoutError, ValueError):
+            with contextlib.suppress(OSError, EOFError, TimeoutError, ValueError, subprocess.TimeoutExpired):
                 deadline = time.monotonic() + 1.0
                 send_parts(self._sock, encode_request(("close", -1, None)), deadline)
                 recv_reply(self._sock, deadline)

@@ -3,7 +3,8 @@ agents' records, and (when the scene can be loaded) the scene, its navmesh and t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -33,11 +34,20 @@ class EpisodeView:
     shortest_paths: tuple[np.ndarray | None, ...]
     note: str
     map_reason: str = ""
+    task_rules: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def failed_agents(self) -> tuple[int, ...]:
-        """Indices of agents whose record says they did not succeed."""
+        """Indices of the agents that failed (MAIN Fig. 6 puts a red cross where they stopped).
+
+        Individual-target: every agent whose own record is not a success. Shared-target: one correct `found`
+        is the team's success, so the other agents did not fail; when the team failed, every agent did.
+        """
         rec = self.agent_records.sort_values("agent_index")
+        if self.episode.task == "shared":
+            if float(self.team_record["success"]) >= 0.5:
+                return ()
+            return tuple(int(i) for i in rec["agent_index"])
         return tuple(int(i) for i, s in zip(rec["agent_index"], rec["success"], strict=True) if s < 0.5)
 
 
@@ -85,7 +95,10 @@ def _shortest(scene: Any, navmesh: Any, dataset: Path, ep: Episode, i: int) -> n
         else:
             path = navmesh.shortest_path(start, ep.target_positions[i])
     except MainBenchError:
-        path = navmesh.shortest_path(start, ep.target_positions[i])
+        try:
+            path = navmesh.shortest_path(start, ep.target_positions[i])
+        except MainBenchError:
+            return None
     path = np.asarray(path, dtype=np.float64).reshape(-1, 3)
     return path if len(path) else None
 
@@ -125,4 +138,4 @@ def load_episode_view(results_dir: str | Path, episode_id: str, *, cache_dir: st
     return EpisodeView(episode=ep, results_dir=results.path, submission=name, trajectory=traj,
                        agent_records=agents, team_record=team.iloc[0], paths_walked=walked, scene=scene,
                        navmesh=navmesh, shortest_paths=shortest, note=note,
-                       map_reason=reason)
+                       map_reason=reason, task_rules=dict(results.summary.get("task_rules") or {}))

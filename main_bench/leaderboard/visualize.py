@@ -17,6 +17,11 @@ from matplotlib.lines import Line2D  # noqa: E402
 
 from .episode_view import EpisodeView  # noqa: E402
 
+START_YELLOW = "#ffd400"
+TARGET_RED = "#e00000"
+SHORTEST_GREEN = "#2ca02c"
+FAILED_RED = "#d00000"
+
 
 def agent_blues(n: int) -> list[tuple]:
     """One shade of blue per agent, dark to light."""
@@ -54,48 +59,31 @@ def view_bounds(view: EpisodeView, margin: float = 1.0) -> tuple[float, float, f
 
 def _flag(ax, x: float, y: float, size: float, label: str | None = None) -> None:
     ax.plot([x, x], [y, y + size], color="#7f0000", linewidth=1.6, zorder=6, solid_capstyle="butt")
-    ax.fill([x, x + 0.7 * size, x], [y + size, y + 0.78 * size, y + 0.56 * size], color="#e00000", zorder=6)
+    ax.fill([x, x + 0.7 * size, x], [y + size, y + 0.78 * size, y + 0.56 * size], color=TARGET_RED, zorder=6)
     if label:
         ax.text(x + 0.75 * size, y + 0.8 * size, label, fontsize=7, color="#7f0000", zorder=7)
 
 
-def draw_episode(ax, view: EpisodeView, upto_step: int | None = None) -> None:
-    """Draw the episode's map on `ax`; with `upto_step`, only the walked paths up to that step."""
+def draw_background(ax, view: EpisodeView) -> None:
+    """Everything of the picture that does not move: navigable cells, shortest paths, targets, starts."""
     ep = view.episode
-    n = ep.num_agents
     x0, x1, y0, y1 = view_bounds(view)
     occ = occupancy(view)
     if occ is not None:
         img, extent = occ
         ax.imshow(img, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=3.5, interpolation="nearest",
                   zorder=0)
-    blues = agent_blues(n)
     size = 0.05 * max(x1 - x0, y1 - y0)
     for path in view.shortest_paths:
         if path is not None:
-            ax.plot(path[:, 0], path[:, 1], color="#2ca02c", linewidth=2.2, alpha=0.85, zorder=2)
-    for i, walked in enumerate(view.paths_walked):
-        w = walked if upto_step is None else walked[: upto_step + 1]
-        if len(w):
-            ax.plot(w[:, 0], w[:, 1], color=blues[i], linewidth=2.0, zorder=3)
+            ax.plot(path[:, 0], path[:, 1], color=SHORTEST_GREEN, linewidth=2.2, alpha=0.85, zorder=2)
     shared = ep.task == "shared" or np.allclose(ep.target_positions, ep.target_positions[0])
     targets = ep.target_positions[:1] if shared else ep.target_positions
     for k, t in enumerate(targets):
         _flag(ax, t[0], t[1], size, None if shared else f"T{k}")
     for i, s in enumerate(ep.start_positions):
-        ax.scatter([s[0]], [s[1]], s=90, color="#ffd400", edgecolors="black", linewidths=0.8, zorder=5)
+        ax.scatter([s[0]], [s[1]], s=90, color=START_YELLOW, edgecolors="black", linewidths=0.8, zorder=5)
         ax.text(s[0], s[1], str(i), fontsize=6, ha="center", va="center", zorder=6)
-    done = upto_step is None or all(upto_step >= len(w) - 1 for w in view.paths_walked)
-    if done:
-        for i in view.failed_agents:
-            if i < len(view.paths_walked) and len(view.paths_walked[i]):
-                e = view.paths_walked[i][-1]
-                ax.scatter([e[0]], [e[1]], marker="x", s=110, color="#d00000", linewidths=2.6, zorder=7)
-    elif upto_step is not None:
-        for i, walked in enumerate(view.paths_walked):
-            if len(walked):
-                p = walked[min(upto_step, len(walked) - 1)]
-                ax.scatter([p[0]], [p[1]], s=30, color=blues[i], edgecolors="white", linewidths=0.8, zorder=6)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
@@ -103,16 +91,41 @@ def draw_episode(ax, view: EpisodeView, upto_step: int | None = None) -> None:
     ax.set_ylabel("y (m)")
 
 
+def draw_walked(ax, view: EpisodeView) -> list:
+    """One line per agent for its walked path (full length); returns the Line2D objects (agent order)."""
+    blues = agent_blues(view.episode.num_agents)
+    lines = []
+    for i, walked in enumerate(view.paths_walked):
+        (line,) = ax.plot(walked[:, 0], walked[:, 1], color=blues[i], linewidth=2.0, zorder=3)
+        lines.append(line)
+    return lines
+
+
+def draw_failures(ax, view: EpisodeView) -> None:
+    """A red cross where each failed agent stopped."""
+    for i in view.failed_agents:
+        if i < len(view.paths_walked) and len(view.paths_walked[i]):
+            e = view.paths_walked[i][-1]
+            ax.scatter([e[0]], [e[1]], marker="x", s=110, color=FAILED_RED, linewidths=2.6, zorder=7)
+
+
+def draw_episode(ax, view: EpisodeView) -> None:
+    """Draw the whole episode on `ax` (MAIN Fig. 6)."""
+    draw_background(ax, view)
+    draw_walked(ax, view)
+    draw_failures(ax, view)
+
+
 def legend_handles(n: int) -> list[Line2D]:
     """Legend entries of the picture's symbols."""
     blues = agent_blues(n)
     return [
-        Line2D([], [], marker="o", linestyle="", markerfacecolor="#ffd400", markeredgecolor="black",
+        Line2D([], [], marker="o", linestyle="", markerfacecolor=START_YELLOW, markeredgecolor="black",
                markersize=8, label="start"),
-        Line2D([], [], marker=">", linestyle="", color="#e00000", markersize=8, label="target"),
-        Line2D([], [], color="#2ca02c", linewidth=2.2, label="shortest path"),
+        Line2D([], [], marker=">", linestyle="", color=TARGET_RED, markersize=8, label="target"),
+        Line2D([], [], color=SHORTEST_GREEN, linewidth=2.2, label="shortest path"),
         *[Line2D([], [], color=blues[i], linewidth=2.0, label=f"agent {i} walked") for i in range(n)],
-        Line2D([], [], marker="x", linestyle="", color="#d00000", markersize=9, markeredgewidth=2.4,
+        Line2D([], [], marker="x", linestyle="", color=FAILED_RED, markersize=9, markeredgewidth=2.4,
                label="failed agent stopped"),
     ]
 
@@ -126,8 +139,8 @@ def episode_title(view: EpisodeView) -> str:
             f"({view.note})")
 
 
-def episode_png(view: EpisodeView, dpi: int = 120) -> bytes:
-    """The episode's top-down picture as PNG bytes."""
+def episode_figure(view: EpisodeView):
+    """(figure, map axes) of the episode's top-down picture, title and legend included (caller closes it)."""
     x0, x1, y0, y1 = view_bounds(view)
     aspect = (y1 - y0) / max(x1 - x0, 1e-6)
     fig, ax = plt.subplots(figsize=(7.5, max(3.5, min(12.0, 6.0 * aspect)) + 0.9))
@@ -136,6 +149,12 @@ def episode_png(view: EpisodeView, dpi: int = 120) -> bytes:
     ax.legend(handles=legend_handles(view.episode.num_agents), fontsize=7, loc="upper left",
               bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     fig.tight_layout()
+    return fig, ax
+
+
+def episode_png(view: EpisodeView, dpi: int = 120) -> bytes:
+    """The episode's top-down picture as PNG bytes (no timestamp, so the bytes are reproducible)."""
+    fig, _ = episode_figure(view)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight", metadata={"Software": None})
     plt.close(fig)

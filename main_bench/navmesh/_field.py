@@ -130,6 +130,30 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64
                 klo[u] = -np.inf
                 khi[u] = np.inf
             size = _heap_push(hk, hv, size, d, u)
+    # The target node's centre is not the target: its neighbours cannot use the bracket test against it (which
+    # needs settled neighbours anchored at the target), so the first ring is seeded by walking each segment.
+    for j in range(tnode.shape[0]):
+        u = tnode[j]
+        if u < 0:
+            continue
+        for dd in range(8):
+            v = nbr[u, dd]
+            if v < 0:
+                continue
+            dx = px[v] - tpos[j, 0]
+            dy = py[v] - tpos[j, 1]
+            dz = pz[v] - tpos[j, 2]
+            dh = np.sqrt(dx * dx + dy * dy)
+            d = np.sqrt(dh * dh + dz * dz)
+            if d >= g[v] or dh <= 1e-9:
+                continue
+            if not _line_of_sight(v, u, tpos[j, 0], tpos[j, 1], tpos[j, 2], nbr, px, py, pz, cs, ztol):
+                continue
+            g[v] = d
+            anchor[v] = n + j
+            klo[v] = (dz - ztol) / dh
+            khi[v] = (dz + ztol) / dh
+            size = _heap_push(hk, hv, size, d, v)
     while size > 0:
         key, u, size = _heap_pop(hk, hv, size)
         if done[u] or key > g[u]:

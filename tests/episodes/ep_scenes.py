@@ -74,3 +74,9 @@ def furnished_room(path: Path, w: float = 12.0, d: float = 10.0) -> Path:
         meshes.append(_box(lo, hi))
         objs.append({"instance_id": i, "category": cat, "bbox_min": list(lo), "bbox_max": list(hi)})
     return write_scene(path, meshes, objs)
+
+
+def dataset_bytes(root: Path) -> dict[str, bytes]:
+    """Every shard file and the manifest of a data set, by relative path."""
+    files = sorted(root.glob("split=*/task=*/agents=*/*.parquet")) + [root / "manifest.json"]
+    return {f.relative_to(root).as_posix(): f.read_bytes() for f in files}
