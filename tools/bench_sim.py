@@ -5,23 +5,16 @@ from __future__ import annotations
 import argparse
 import json
 
-from main_bench.benchmarks.sim import run
+from main_bench.benchmarks.sim import run, summary_lines
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--json", action="store_true", help="print the full result as JSON")
-    parser.add_argument("--quick", action="store_true", help="one built-in house, fewer steps")
+    parser.add_argument("--quick", action="store_true", help="one built-in house, 60 team steps, 3 repeats")
     args = parser.parse_args()
     result = run(quick=args.quick)
-    if args.json:
-        print(json.dumps(result, indent=2))
-        return
-    for row in result["results"]:
-        gl, tiny = row["gl"], row["tiny"]
-        print(f"{row['scene']} ({row['triangles']} triangles): gl {gl.get('agent_steps_per_s', gl.get('error'))} "
-              f"agent-steps/s, tiny {tiny.get('agent_steps_per_s', tiny.get('error'))}, "
-              f"ratio {row.get('gl_over_tiny')}")
+    print(json.dumps(result, indent=2) if args.json else "\n".join(summary_lines(result)))
 
 
 if __name__ == "__main__":

@@ -1,10 +1,15 @@
 """Simulator speed: agent-steps per second with 128 x 128 RGB-D for every agent, 3 agents, per backend.
 
-One agent-step = one agent's action resolved (collisions included) plus its RGB-D observation rendered.
-Scenes: a built-in procedural house (`generate_house(seed)`), the synthetic `box_house`, and, when the
-shared real scenes are found (MAIN_BENCH_REAL_SCENES or ../shared/scenes), the 146k-triangle AWS house.
-Each (scene, backend) is timed `repeats` times over `steps` steps from navmesh start points with seeded
-random actions; the median is reported, with the collision step and the render timed apart.
+One agent-step = one agent's action resolved (collisions included) plus its RGB-D observation rendered: a
+team step is `Simulator.step` (all agents) and `Simulator.observe` (all agents' views), counted as 3
+agent-steps. Scenes: the built-in house `house_0000` (always), and in the full run the two-storey
+`house_0001`, the synthetic `box_house` and, when the shared real scenes are found (MAIN_BENCH_REAL_SCENES
+or ../shared/scenes), the 146k-triangle furnished AWS house.
+
+Both backends run in the same process, on the same seeded random actions from the same navmesh start points,
+and their repeats are interleaved (gl, tiny, gl, tiny, ...) so that a change in the machine's load hits both
+alike. Each figure is the median over `repeats`; the collision step and the render are also timed apart,
+and CPU time (all threads of this process) is reported next to wall time because the machine is shared.
 """
 
 from __future__ import annotations
@@ -14,7 +19,9 @@ import platform
 import statistics
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -23,23 +30,27 @@ from ..sim import SimSettings, Simulator
 from ..sim.synthetic import box_house
 
 AGENTS = 3
+BACKENDS = ("gl", "tiny")
+#: The bar of issue 5: agent-steps/s of the fastest backend, and its ratio to pybullet's renderer (tiny).
+GOAL_AGENT_STEPS_PER_S = 300.0
+GOAL_OVER_TINY = 5.0
 
 
 def _scenes(quick: bool, workdir: Path) -> list[tuple[str, Scene]]:
     from ..scenes.procedural import generate_house, write_house
 
-    out = [("builtin_house_0", load_scene(write_house(generate_house(0), workdir)))]
+    out = [("builtin house_0000", load_scene(write_house(generate_house(0), workdir)))]
     if not quick:
-        out.append(("builtin_house_1", load_scene(write_house(generate_house(1), workdir))))
-        out.append(("synthetic_box_house", box_house(0)))
+        out.append(("builtin house_0001 (two storeys)", load_scene(write_house(generate_house(1), workdir))))
+        out.append(("synthetic box_house", box_house(0)))
         real = os.environ.get("MAIN_BENCH_REAL_SCENES") or str(Path(__file__).resolve().parents[3] / "shared" / "scenes")
         house = Path(real) / "aws_small_house_visual_yup.glb"
         if house.is_file():
-            out.append(("aws_small_house_visual", load_scene(house)))
+            out.append(("aws_small_house_visual (real, textured)", load_scene(house)))
     return out
 
 
-def _starts(scene: Scene, rng: np.random.Generator) -> np.ndarray:
+def _starts(scene: Scene, rng: np.random.Generator) -> tuple[Any, np.ndarray]:
     from ..navmesh import NavMesh
 
     nm = NavMesh.build(scene)
@@ -47,65 +58,122 @@ def _starts(scene: Scene, rng: np.random.Generator) -> np.ndarray:
     return nm, nm.sample(AGENTS, rng, island=island)
 
 
-def _time_backend(scene: Scene, nm, starts: np.ndarray, kind: str, steps: int, repeats: int) -> dict:
-    rng = np.random.default_rng(0)
-    yaws = rng.uniform(-np.pi, np.pi, AGENTS)
-    actions = rng.choice([1, 1, 1, 2, 3], size=(steps, AGENTS)).tolist()
-    full, physics, render, queries = [], [], [], []
-    with Simulator(scene, nm, SimSettings(renderer=kind), seed=0) as sim:
-        sim.reset(starts, yaws)
-        sim.observe()  # warm-up: context, buffers, first frame
-        for _ in range(repeats):
-            sim.reset(starts, yaws)
-            q0 = sim.collision_queries
-            t_phys = t_render = 0.0
-            t0 = time.perf_counter()
-            for a in actions:
-                t1 = time.perf_counter()
-                sim.step(a)
-                t2 = time.perf_counter()
-                sim.observe()
-                t_render += time.perf_counter() - t2
-                t_phys += t2 - t1
-            total = time.perf_counter() - t0
-            full.append(AGENTS * steps / total)
-            physics.append(t_phys / steps * 1e3)
-            render.append(t_render / steps * 1e3)
-            queries.append((sim.collision_queries - q0) / (steps * AGENTS))
-        device = getattr(sim.renderer, "device", kind)
+def _one_repeat(sim: Simulator, starts: np.ndarray, yaws: np.ndarray, actions: list[list[int]]) -> dict:
+    """One timed run of `actions` (team steps) from the start poses: rates and per-team-step times."""
+    sim.reset(starts, yaws)
+    q0 = sim.collision_queries
+    t_phys = t_render = 0.0
+    c0, t0 = time.process_time(), time.perf_counter()
+    for a in actions:
+        t1 = time.perf_counter()
+        sim.step(a)
+        t2 = time.perf_counter()
+        sim.observe()
+        t_render += time.perf_counter() - t2
+        t_phys += t2 - t1
+    total, cpu = time.perf_counter() - t0, time.process_time() - c0
+    n = len(actions)
+    return {"rate": AGENTS * n / total, "cpu_ms": cpu / (AGENTS * n) * 1e3, "step_ms": t_phys / n * 1e3,
+            "render_ms": t_render / n * 1e3, "queries": (sim.collision_queries - q0) / (AGENTS * n)}
+
+
+def _summary(runs: list[dict], sim: Simulator, steps: int) -> dict:
+    med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
     return {
-        "agent_steps_per_s": round(statistics.median(full), 1),
-        "agent_steps_per_s_runs": [round(v, 1) for v in full],
-        "step_ms_per_team_step": round(statistics.median(physics), 3),
-        "render_ms_per_team_step": round(statistics.median(render), 3),
-        "probe_queries_per_agent_step": round(statistics.median(queries), 2),
-        "device": device,
+        "agent_steps_per_s": round(med["rate"], 1),
+        "agent_steps_per_s_runs": [round(r["rate"], 1) for r in runs],
+        "cpu_ms_per_agent_step": round(med["cpu_ms"], 3),
+        "step_ms_per_team_step": round(med["step_ms"], 3),
+        "render_ms_per_team_step": round(med["render_ms"], 3),
+        "probe_queries_per_agent_step": round(med["queries"], 2),
+        "team_steps_per_repeat": steps,
+        "device": getattr(sim.renderer, "device", sim.renderer_name),
     }
 
 
-def run(quick: bool = False) -> dict:
+def time_backends(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, repeats: int,
+                  backends: Sequence[str] = BACKENDS) -> dict[str, dict]:
+    """Time each backend on `steps` team steps (tiny: a quarter, at least 20), `repeats` interleaved runs;
+    a backend that cannot start here is reported as {"error": ...}."""
+    rng = np.random.default_rng(0)
+    yaws = rng.uniform(-np.pi, np.pi, AGENTS)
+    actions = rng.choice([1, 1, 1, 2, 3], size=(steps, AGENTS)).tolist()
+    sims: dict[str, Simulator] = {}
+    out: dict[str, dict] = {}
+    runs: dict[str, list[dict]] = {}
+    try:
+        for kind in backends:
+            try:
+                sim = Simulator(scene, navmesh, SimSettings(renderer=kind), seed=0)
+                sims[kind] = sim
+                sim.reset(starts, yaws)
+                sim.observe()  # warm-up: context, buffers, first frame
+                runs[kind] = []
+            except Exception as exc:  # a backend missing on this machine is reported, not fatal
+                out[kind] = {"error": f"{type(exc).__name__}: {exc}"}
+        count = {kind: steps if kind != "tiny" else min(steps, max(20, steps // 4)) for kind in runs}
+        for _ in range(repeats):
+            for kind in runs:
+                runs[kind].append(_one_repeat(sims[kind], starts, yaws, actions[:count[kind]]))
+        for kind, r in runs.items():
+            out[kind] = _summary(r, sims[kind], count[kind])
+    finally:
+        for sim in sims.values():
+            sim.close()
+    return {kind: out[kind] for kind in backends}
+
+
+def _verdict(row: dict) -> None:
+    rates = {k: row[k]["agent_steps_per_s"] for k in BACKENDS if "agent_steps_per_s" in row.get(k, {})}
+    if not rates:
+        return
+    fastest = max(rates, key=rates.__getitem__)
+    row["fastest"] = fastest
+    row["meets_300_agent_steps_per_s"] = rates[fastest] >= GOAL_AGENT_STEPS_PER_S
+    if "tiny" in rates and "gl" in rates:
+        row["gl_over_tiny"] = round(rates["gl"] / rates["tiny"], 2)
+        row["meets_5x_tiny"] = row["gl_over_tiny"] >= GOAL_OVER_TINY
+
+
+def _machine() -> dict:
+    return {"cpus": os.cpu_count(), "platform": platform.platform(), "processor": platform.processor(),
+            "python": platform.python_version(), "LP_NUM_THREADS": os.environ.get("LP_NUM_THREADS"),
+            "load_average_1min_at_start": round(os.getloadavg()[0], 2)}
+
+
+def run(quick: bool = False, *, steps: int | None = None, repeats: int | None = None) -> dict:
     """Time both backends side by side on each scene; returns a JSON-ready dict (figures are medians)."""
-    steps, repeats = (60, 3) if quick else (200, 5)
+    steps = steps or (60 if quick else 200)
+    repeats = repeats or (3 if quick else 5)
+    machine = _machine()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, scene in _scenes(quick, Path(tmp)):
             nm, starts = _starts(scene, np.random.default_rng(1))
-            row = {"scene": name, "triangles": scene.triangle_count, "agents": AGENTS, "steps": steps,
-                   "repeats": repeats}
-            for kind in ("gl", "tiny"):
-                try:
-                    row[kind] = _time_backend(scene, nm, starts, kind, steps if kind == "gl" else max(20, steps // 4),
-                                              repeats)
-                except Exception as exc:  # a backend missing on this machine is reported, not fatal
-                    row[kind] = {"error": f"{type(exc).__name__}: {exc}"}
-            if "agent_steps_per_s" in row["gl"] and "agent_steps_per_s" in row["tiny"]:
-                row["gl_over_tiny"] = round(row["gl"]["agent_steps_per_s"] / row["tiny"]["agent_steps_per_s"], 2)
+            row: dict[str, Any] = {"scene": name, "triangles": scene.triangle_count, "agents": AGENTS,
+                                   "repeats": repeats}
+            row.update(time_backends(scene, nm, starts, steps, repeats))
+            _verdict(row)
             results.append(row)
+    machine["load_average_1min_at_end"] = round(os.getloadavg()[0], 2)
     return {
         "benchmark": "sim",
         "quick": quick,
         "camera": "128x128 RGB-D, hfov 90",
-        "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "python": platform.python_version(),
-                    "LP_NUM_THREADS": os.environ.get("LP_NUM_THREADS")},
+        "goal": {"agent_steps_per_s": GOAL_AGENT_STEPS_PER_S, "fastest_over_tiny": GOAL_OVER_TINY},
+        "machine": machine,
         "results": results,
     }
+
+
+def summary_lines(result: dict) -> list[str]:
+    """The result of `run` as short text lines: machine and load, then one line per scene."""
+    m = result["machine"]
+    lines = [f"{m['cpus']} CPUs, {m['platform']}; 1-min load {m['load_average_1min_at_start']} at start, "
+             f"{m['load_average_1min_at_end']} at end"]
+    for row in result["results"]:
+        rates = {k: row[k].get("agent_steps_per_s", row[k].get("error")) for k in BACKENDS}
+        lines.append(f"{row['scene']} ({row['triangles']} triangles, medians of {row['repeats']}): "
+                     + ", ".join(f"{k} {v} agent-steps/s" for k, v in rates.items())
+                     + f"; gl/tiny {row.get('gl_over_tiny')}; gl on {row['gl'].get('device')}")
+    return lines

@@ -110,8 +110,7 @@ def validate(
     """Check a data set (schema, checksums, ids, value ranges; --recheck distances). Exit 0 only if all hold."""
     from ..episodes.validate import validate_dataset
 
-    nav_cache = cache_dir / "navmesh" if cache_dir is not None else _default_navmesh_cache()
-    report = validate_dataset(dataset, recheck=recheck, sample=sample, cache_dir=nav_cache)
+    report = validate_dataset(dataset, recheck=recheck, sample=sample, cache_dir=cache_dir)
     emit("episodes validate", report.to_json(), as_json, lambda d: report.render())
     if not report.ok:
         raise typer.Exit(1)

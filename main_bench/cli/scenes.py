@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import typer
@@ -61,6 +62,7 @@ def generate(
 
         raise InputError("exists and is not a folder; give a folder for the houses", path=out)
     houses = []
+    start = time.perf_counter()
     with progress("houses", count, enabled=not (quiet or as_json)) as advance:
         for s in range(seed, seed + count):
             house = generate_house(s)
@@ -71,17 +73,20 @@ def generate(
                 "categories": len(house.categories), "triangles": house.triangle_count(),
             })
             advance(1)
-    payload = {"out": str(out), "generator_version": GENERATOR_VERSION, "count": count, "houses": houses}
+    seconds = time.perf_counter() - start
+    payload = {"out": str(out), "generator_version": GENERATOR_VERSION, "count": count, "houses": houses,
+               "seconds": round(seconds, 3), "seconds_per_house": round(seconds / count, 4)}
     emit("scenes generate", payload, as_json, _render_generate)
 
 
 def _render_generate(d: dict) -> str:
-    lines = [f"wrote {d['count']} house(s) to {d['out']} (generator {d['generator_version']})"]
-    for h in d["houses"][:20]:
-        lines.append(f"  {h['scene_id']}  {h['floors']} floor(s), {h['rooms']:2d} rooms, {h['area_m2']:6.1f} m^2, "
-                     f"{h['objects']:3d} objects in {h['categories']} categories")
-    if len(d["houses"]) > 20:
-        lines.append(f"  ... and {len(d['houses']) - 20} more")
+    lines = [f"wrote {d['count']} house(s) to {d['out']} (generator {d['generator_version']}) in "
+             f"{d['seconds']:.1f} s, {d['seconds_per_house']:.2f} s per house"]
+    shown = d["houses"][:20]
+    lines += [f"  {h['scene_id']}  {h['floors']} floor(s), {h['rooms']:2d} rooms, {h['area_m2']:6.1f} m^2, "
+              f"{h['objects']:3d} objects in {h['categories']} categories" for h in shown]
+    if hidden := len(d["houses"]) - len(shown):
+        lines.append(f"  ... and {hidden} more")
     return "\n".join(lines)
 
 

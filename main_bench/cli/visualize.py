@@ -19,8 +19,9 @@ def visualize(
     results: Path = typer.Argument(..., help="Results directory written by `main-bench evaluate`."),
     episode: str = typer.Option(..., "--episode", help="Episode id (see records/ or the leaderboard)."),
     out: Path = typer.Option(..., "--out", help="Output file (.png or .gif)."),
-    fmt: str = typer.Option("png", "--format", help="png: top-down map (MAIN Fig. 6); gif: agents' RGB views "
-                                                    "beside the map, step by step."),
+    fmt: str | None = typer.Option(None, "--format", help="png: top-down map (MAIN Fig. 6); gif: agents' RGB "
+                                                          "views beside the map, step by step (default: from "
+                                                          "the --out suffix, else png)."),
     cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache of built-in scenes and navmeshes."),
     renderer: str = typer.Option("auto", "--renderer", help="Renderer of the GIF's views: auto, gl or tiny."),
     max_frames: int = typer.Option(60, "--max-frames", min=2, help="Most GIF frames (steps are subsampled)."),
@@ -30,6 +31,8 @@ def visualize(
     from ..io import atomic_write_bytes
     from ..leaderboard.episode_view import load_episode_view
 
+    if fmt is None:
+        fmt = "gif" if out.suffix.lower() == ".gif" else "png"
     if fmt not in ("png", "gif"):
         raise InputError(f"--format must be png or gif, got {fmt!r}")
     view = load_episode_view(results, episode, cache_dir=cache_dir)

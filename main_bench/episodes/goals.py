@@ -54,8 +54,10 @@ def goal_points(navmesh: NavMesh, obj: SemanticObject, settings: Any) -> np.ndar
     lo = np.asarray(obj.bbox_min, dtype=np.float64)
     hi = np.asarray(obj.bbox_max, dtype=np.float64)
     ns = navmesh.settings
-    z = cells[:, 2]
-    level = (z >= lo[2] - float(ns.agent_height)) & (z <= lo[2] + float(ns.max_climb))
+    x, y, z = cells[:, 0], cells[:, 1], cells[:, 2]
+    r = radius + 1e-9  # the box grown by the radius holds every cell within the radius of the footprint
+    near_box = (x >= lo[0] - r) & (x <= hi[0] + r) & (y >= lo[1] - r) & (y <= hi[1] + r)
+    level = near_box & (z >= lo[2] - float(ns.agent_height)) & (z <= lo[2] + float(ns.max_climb))
     idx = np.flatnonzero(level)
     if len(idx) == 0:
         return np.zeros((0, 3))

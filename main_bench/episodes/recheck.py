@@ -26,26 +26,35 @@ def _pick(total: int, sample: int | None, seed: int) -> np.ndarray:
 def recheck_distances(manifest: Manifest, tables: list[tuple[ShardEntry, pa.Table]], report: ValidationReport,
                       *, sample: int | None = None, cache_dir: str | Path | None = None) -> None:
     """Recompute the geodesic distance of every agent of every (or `sample` random) episode; add problems
-    where |recomputed - stored| > 1% + 1 cm. Fields are built once per (scene, target)."""
+    where |recomputed - stored| > 1% + 1 cm. Fields are built once per (scene, target).
+
+    `cache_dir`: the cache root as for generation (built-in houses in it, navmeshes in `cache_dir/navmesh`);
+    None: the default cache.
+    """
     from ..navmesh import NavMesh
-    from ..scenes import load_scene
+    from ..scenes import builtin, load_scene
     from .dataset import resolve_scene
     from .validate import RECHECK_ABS, RECHECK_REL
 
-    rows = []  # (scene_id, shard, episode_id, start (N,3), instance ids (N,), target pos (N,3), geo (N,))
-    for entry, table in tables:
-        for r in table.select(["episode_id", "start_positions", "target_instance_ids", "target_positions",
-                               "geodesic_distances"]).to_pylist():
-            rows.append((entry.scene_id, entry.path, r))
-    picked = _pick(len(rows), sample, manifest.seed)
+    sizes = [table.num_rows for _, table in tables]
+    picked = _pick(sum(sizes), sample, manifest.seed)
+    offsets = np.cumsum([0] + sizes)
+    rows = []  # (scene_id, shard, row dict) of the picked episodes only: a sample never converts the whole set
+    for k, (entry, table) in enumerate(tables):
+        local = picked[(picked >= offsets[k]) & (picked < offsets[k + 1])] - offsets[k]
+        if len(local) == 0:
+            continue
+        part = table.select(["episode_id", "start_positions", "target_instance_ids", "target_positions",
+                             "geodesic_distances"]).take(pa.array(local))
+        rows += [(entry.scene_id, entry.path, r) for r in part.to_pylist()]
     by_scene: dict[str, list[int]] = {}
-    for i in picked:
-        by_scene.setdefault(rows[i][0], []).append(int(i))
+    for i, row in enumerate(rows):
+        by_scene.setdefault(row[0], []).append(i)
+    root = Path(cache_dir) if cache_dir is not None else Path(builtin.default_cache_dir())
     nav_settings = manifest.navmesh()
     for scene_id in sorted(by_scene):
-        scene = load_scene(resolve_scene(manifest, scene_id, cache_dir), up=manifest.scenes[scene_id].up)
-        navmesh = (NavMesh.build_cached(scene, nav_settings, Path(cache_dir)) if cache_dir is not None
-                   else NavMesh.build(scene, nav_settings))
+        scene = load_scene(resolve_scene(manifest, scene_id, root), up=manifest.scenes[scene_id].up)
+        navmesh = NavMesh.build_cached(scene, nav_settings, root / "navmesh")
         # Group agents by target: object instance id, or the point goal's coordinates.
         groups: dict[object, list[tuple[int, int]]] = {}
         for i in by_scene[scene_id]:

@@ -10,10 +10,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -23,17 +21,13 @@ from ..episodes.schema import Episode
 from ..errors import DatasetError, PolicyFailure
 from .baselines import privileged_baseline
 from .chunks import Chunk
-from .episode_loop import EpisodeFailure, LoopSettings, run_episode, target_key
+from .episode_loop import EpisodeFailure, LoopSettings, run_episode
 from .metrics import EpisodeTrace, episode_metrics
 from .records import RECORD_SCHEMA, TRAJECTORY_SCHEMA
+from .resources import EpisodeResources
 from .results import write_part
 from .settings import EvalSettings
 from .task_rules import rules_from_manifest, sim_settings_from_manifest
-
-#: Target distance fields kept per worker (they are rebuilt on a miss; results do not depend on this).
-FIELD_CACHE = 64
-#: Extra clearance (metres) of the navmesh the privileged baselines plan on, so their paths keep off walls.
-PLAN_MARGIN = 0.1
 
 
 @dataclass(frozen=True)
@@ -91,10 +85,7 @@ class WorkerContext:
         self.manifest = read_manifest(settings.episodes)
         self.sim_settings = sim_settings_from_manifest(self.manifest, settings.renderer)
         self._episodes: dict[tuple[str, int], dict[str, Episode]] = {}
-        self._scenes: dict[str, tuple[Any, Any]] = {}
-        self._plan_navmeshes: dict[str, Any] = {}
-        self._sims: dict[tuple[str, int], Any] = {}
-        self._fields: OrderedDict[tuple, Any] = OrderedDict()
+        self.resources = EpisodeResources(self.manifest, self.sim_settings, settings.cache_dir, settings.seed)
         self._policy: Any = None
         self._privileged = False
         self.streak: list[str] = []
@@ -123,80 +114,6 @@ class WorkerContext:
             raise DatasetError(f"episode {episode_id!r} is not in the data set any more; was it regenerated "
                                "under this results directory? Use a new --out", path=self.settings.episodes) from None
 
-    def _scene(self, scene_id: str) -> tuple[Any, Any]:
-        if scene_id not in self._scenes:
-            from ..episodes.dataset import resolve_scene
-            from ..navmesh import NavMesh
-            from ..scenes.loader import load_scene
-
-            entry = self.manifest.scenes.get(scene_id)
-            path = resolve_scene(self.manifest, scene_id, self.settings.cache_dir)
-            scene = load_scene(path, up=getattr(entry, "up", "auto") or "auto")
-            navmesh = NavMesh.build_cached(scene, self.manifest.navmesh(), self._navmesh_cache())
-            self._scenes[scene_id] = (scene, navmesh)
-        return self._scenes[scene_id]
-
-    def _navmesh_cache(self) -> Path:
-        if self.settings.cache_dir is not None:
-            return Path(self.settings.cache_dir) / "navmesh"
-        from ..scenes.builtin import default_cache_dir
-
-        return Path(default_cache_dir()) / "navmesh"
-
-    def _sim(self, scene_id: str, agents: int) -> Any:
-        key = (scene_id, agents)
-        if key not in self._sims:
-            from ..sim import Simulator
-
-            for old in [k for k in self._sims if k[0] != scene_id]:
-                self._sims.pop(old).close()
-            scene, navmesh = self._scene(scene_id)
-            self._sims[key] = Simulator(scene, navmesh, self.sim_settings, seed=self.settings.seed)
-        return self._sims[key]
-
-    def _plan_navmesh(self, scene_id: str) -> Any:
-        """The privileged baselines' planning navmesh: the data set's, eroded by `PLAN_MARGIN` more."""
-        if scene_id not in self._plan_navmeshes:
-            from dataclasses import replace
-
-            from ..navmesh import NavMesh
-
-            scene, _ = self._scene(scene_id)
-            nav = self.manifest.navmesh()
-            wider = replace(nav, agent_radius=float(nav.agent_radius) + PLAN_MARGIN)
-            self._plan_navmeshes[scene_id] = NavMesh.build_cached(scene, wider, self._navmesh_cache())
-        return self._plan_navmeshes[scene_id]
-
-    def _fields_for(self, episode: Episode, planning: bool = False) -> list[Any]:
-        """Each agent's target distance field (on the planning navmesh when `planning`; None where the
-        target has no goal point there)."""
-        from ..episodes.goals import target_field
-        from ..errors import InputError
-
-        scene, navmesh = self._scene(episode.scene_id)
-        mesh = self._plan_navmesh(episode.scene_id) if planning else navmesh
-        out = []
-        for i in range(episode.num_agents):
-            key = (episode.scene_id, planning, target_key(episode, i))
-            if key in self._fields:
-                self._fields.move_to_end(key)
-            else:
-                inst = int(episode.target_instance_ids[i])
-                target = inst if inst >= 0 else np.asarray(episode.target_positions[i], dtype=np.float64)
-                try:
-                    field = target_field(mesh, scene, target, self.manifest)
-                    if planning and not np.any(field.reachable_targets):
-                        field = None
-                except InputError:
-                    if not planning:
-                        raise
-                    field = None
-                self._fields[key] = field
-                while len(self._fields) > FIELD_CACHE:
-                    self._fields.popitem(last=False)
-            out.append(self._fields[key])
-        return out
-
     # -- work ---------------------------------------------------------------------------------------------------
 
     def run_chunk(self, chunk: Chunk, on_episode: Callable[[int], None] | None = None) -> ChunkReport:
@@ -217,9 +134,9 @@ class WorkerContext:
         steps_total = 0
         for episode_id in chunk.episode_ids:
             episode = self._episode(chunk, episode_id)
-            sim = self._sim(episode.scene_id, episode.num_agents)
-            fields = self._fields_for(episode)
-            plan_fields = self._fields_for(episode, planning=True) if self._privileged else None
+            sim = self.resources.simulator(episode.scene_id, episode.num_agents)
+            fields = self.resources.fields(episode)
+            plan_fields = self.resources.fields(episode, planning=True) if self._privileged else None
             trace, failure, steps = run_episode(episode, sim, fields, policy, loop, self.settings.seed,
                                                 self._privileged, render, plan_fields)
             steps_total += steps
@@ -247,9 +164,7 @@ class WorkerContext:
 
     def close(self) -> None:
         """Close the simulators and the policy process."""
-        for sim in self._sims.values():
-            sim.close()
-        self._sims.clear()
+        self.resources.close()
         if self._policy is not None and hasattr(self._policy, "close"):
             self._policy.close()
         self._policy = None

@@ -71,6 +71,7 @@ def build_leaderboard(results_dirs: list[str | Path], out_dir: str | Path,
         for fig in sec.figures:
             rel = f"plots/section{sec.index}_{fig.name}.png"
             atomic_write_bytes(out / rel, fig.png)
+            atomic_write_text((out / rel).with_suffix(".csv"), fig.csv_text())
             figure_files[(sec.index, fig.name)] = rel
             figure_paths.append(out / rel)
     atomic_write_json(out / "leaderboard.json", leaderboard_json(sections, settings.tables))

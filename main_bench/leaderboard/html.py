@@ -108,10 +108,15 @@ def _section_html(section: Section) -> str:
              "<h3>Submissions</h3>", _submissions_html(section)]
     parts += [track_html(t) for t in section.tracks]
     parts += [table2_html(t) for t in section.table2]
+    if section.figures:
+        parts.append("<h3>Plots</h3>")
     for fig in section.figures:
         data = base64.b64encode(fig.png).decode("ascii")
+        csv = base64.b64encode(fig.csv_text().encode()).decode("ascii")
         parts.append(f'<figure><img alt="{escape(fig.caption, quote=True)}" src="data:image/png;base64,{data}">'
-                     f"<figcaption>{escape(fig.caption)}</figcaption></figure>")
+                     f"<figcaption>{escape(fig.caption)} "
+                     f'<a download="section{section.index}_{escape(fig.name, quote=True)}.csv" '
+                     f'href="data:text/csv;base64,{csv}">numbers (CSV)</a></figcaption></figure>')
     return "\n".join(parts)
 
 

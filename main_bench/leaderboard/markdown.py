@@ -82,6 +82,10 @@ def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]
                 _submissions_markdown(sec), ""]
         out += [track_markdown(t) + "\n" for t in sec.tracks]
         out += [table2_markdown(t) + "\n" for t in sec.table2]
+        if sec.figures:
+            out += ["### Plots", ""]
         for fig in sec.figures:
-            out += [f"![{md_escape(fig.caption)}]({figure_files[(sec.index, fig.name)]})", ""]
+            png = figure_files[(sec.index, fig.name)]
+            csv = png.removesuffix(".png") + ".csv"
+            out += [f"![{md_escape(fig.caption)}]({png})", "", f"Numbers behind it: [{csv}]({csv})", ""]
     return "\n".join(out).rstrip() + "\n"

@@ -5,27 +5,20 @@ Every interval is the same seeded bootstrap interval the tables show.
 
 from __future__ import annotations
 
-import io
-
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
 
+from ..stats.figures import png_bytes  # noqa: E402
 from .report import Figure  # noqa: E402
 from .submissions import LoadedSubmission  # noqa: E402
 from .tables import TableSettings, TrackTable, estimate  # noqa: E402
 
 #: Upper edges of the geodesic-distance bins (metres) for success against distance; the last bin is open.
 DISTANCE_EDGES: tuple[float, ...] = (0.0, 4.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, np.inf)
-
-
-def _png(fig) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})
-    plt.close(fig)
-    return buf.getvalue()
 
 
 def _colors(names: list[str]) -> dict[str, tuple]:
@@ -64,41 +57,59 @@ def method_bars(tracks: list[TrackTable], names: list[str]) -> Figure:
         ax.grid(axis="x", alpha=0.3)
     axes.flat[0].legend(loc="lower right", fontsize=8)
     fig.tight_layout()
-    return Figure("methods", "Team success and SPL per method and track, with 95% bootstrap intervals.", _png(fig))
+    table = pd.DataFrame([{"track": t.key, "method": e.submission.name, "baseline": e.submission.baseline,
+                           "metric": m, "mean": e.metrics[m].mean, "ci_low": e.metrics[m].lo,
+                           "ci_high": e.metrics[m].hi, "episodes": e.episodes}
+                          for t in tracks for e in t.entries for m in ("success", "spl")])
+    return Figure("methods", "Team success and SPL per method and track, with 95% bootstrap intervals.", png_bytes(fig),
+                  table)
+
+
+def distance_bins(values: np.ndarray) -> np.ndarray:
+    """Index of each geodesic distance's bin in DISTANCE_EDGES (bin b holds [edge b, edge b+1))."""
+    return np.digitize(np.asarray(values, dtype=np.float64), np.array(DISTANCE_EDGES)[1:-1])
+
+
+def success_by_distance_table(subs: list[LoadedSubmission], settings: TableSettings) -> pd.DataFrame:
+    """Per task, method and geodesic-distance bin: episodes, team success mean and its bootstrap interval."""
+    edges = np.array(DISTANCE_EDGES)
+    rows = []
+    for s in subs:
+        for task, team in s.teams.groupby("task", sort=True):
+            which = distance_bins(team["geodesic_distance"].to_numpy())
+            for b in np.unique(which):
+                est = estimate(team["success"].to_numpy()[which == b], settings)
+                rows.append({"task": task, "method": s.submission.name, "baseline": s.submission.baseline,
+                             "bin": int(b), "bin_low_m": edges[b], "bin_high_m": edges[b + 1],
+                             "episodes": int((which == b).sum()), "success": est.mean, "ci_low": est.lo,
+                             "ci_high": est.hi})
+    return pd.DataFrame(rows)
 
 
 def success_by_distance(subs: list[LoadedSubmission], settings: TableSettings) -> Figure:
     """Team success against bins of the episode's geodesic distance L, one panel per task, one line per method."""
-    tasks = sorted({t for s in subs for t in s.teams["task"].unique()})
-    colors = _colors([s.submission.name for s in subs])
+    table = success_by_distance_table(subs, settings)
+    tasks = sorted(table["task"].unique())
+    names = [s.submission.name for s in subs]
+    colors = _colors(names)
     edges = np.array(DISTANCE_EDGES)
+    first, last = int(table["bin"].min()), int(table["bin"].max())
     fig, axes = plt.subplots(1, len(tasks), figsize=(5.5 * len(tasks), 3.8), squeeze=False)
-    all_l = np.concatenate([s.teams["geodesic_distance"].to_numpy() for s in subs])
-    used = np.unique(np.digitize(all_l, edges[1:-1]))
-    first, last = int(used.min()), int(used.max())
     for ax, task in zip(axes.flat, tasks, strict=True):
         for k, s in enumerate(subs):
-            team = s.teams[s.teams["task"] == task]
-            if team.empty:
+            t = table[(table["task"] == task) & (table["method"] == s.submission.name)]
+            if t.empty:
                 continue
-            which = np.digitize(team["geodesic_distance"].to_numpy(), edges[1:-1])
-            xs, means, lo, hi = [], [], [], []
-            for b in range(len(edges) - 1):
-                vals = team["success"].to_numpy()[which == b]
-                if len(vals) == 0:
-                    continue
-                est = estimate(vals, settings)
-                xs.append(b + (k - (len(subs) - 1) / 2) * 0.06)
-                means.append(est.mean * 100)
-                lo.append((est.mean - est.lo) * 100)
-                hi.append((est.hi - est.mean) * 100)
-            ax.errorbar(xs, means, yerr=[lo, hi], marker="o", capsize=3, color=colors[s.submission.name],
-                        label=_label(s.submission))
+            m = t["success"].to_numpy() * 100
+            ax.errorbar(t["bin"].to_numpy() + (k - (len(subs) - 1) / 2) * 0.06, m,
+                        yerr=[m - t["ci_low"].to_numpy() * 100, t["ci_high"].to_numpy() * 100 - m], marker="o",
+                        capsize=3, color=colors[s.submission.name], label=_label(s.submission))
         labels = [f"{edges[b]:g}–{edges[b + 1]:g}" if np.isfinite(edges[b + 1]) else f">{edges[b]:g}"
                   for b in range(first, last + 1)]
         ax.set_xticks(range(first, last + 1), labels, fontsize=8)
         ax.set_xlim(first - 0.4, last + 0.4)
-        ax.set_xlabel("geodesic distance L (m)")
+        ax.set_xlabel("episode geodesic distance L (m): " + ("min over agents" if task == "shared"
+                                                              else "sum over agents"))
         ax.set_ylabel("team success (%)")
         ax.set_ylim(-3, 103)
         ax.set_title(f"{task}-target", fontsize=10)
@@ -106,8 +117,9 @@ def success_by_distance(subs: list[LoadedSubmission], settings: TableSettings) -
     axes.flat[0].legend(fontsize=8)
     fig.tight_layout()
     return Figure("success_by_distance",
-                  "Team success against the episode's geodesic distance L (all splits and team sizes pooled), "
-                  "with 95% bootstrap intervals.", _png(fig))
+                  "Team success against the episode's geodesic distance L (shared-target: the shortest agent "
+                  "start-to-target distance; individual-target: their sum), all splits and team sizes pooled, "
+                  "with 95% bootstrap intervals.", png_bytes(fig), table)
 
 
 def scene_heatmap(subs: list[LoadedSubmission], metric: str = "success") -> Figure:
@@ -117,14 +129,17 @@ def scene_heatmap(subs: list[LoadedSubmission], metric: str = "success") -> Figu
     names = [_label(s.submission) for s in subs]
     fig, axes = plt.subplots(len(tasks), 1, figsize=(max(5.0, 1.0 + 0.9 * len(scenes)),
                                                      (0.45 * len(subs) + 1.6) * len(tasks)), squeeze=False)
+    rows = []
     for ax, task in zip(axes.flat, tasks, strict=True):
         grid = np.full((len(subs), len(scenes)), np.nan)
         for i, s in enumerate(subs):
             team = s.teams[s.teams["task"] == task]
-            means = team.groupby("scene_id")[metric].mean()
+            by_scene = team.groupby("scene_id")[metric].agg(["mean", "count"])
             for j, sc in enumerate(scenes):
-                if sc in means.index:
-                    grid[i, j] = means[sc]
+                if sc in by_scene.index:
+                    grid[i, j] = by_scene.loc[sc, "mean"]
+                    rows.append({"task": task, "method": s.submission.name, "scene_id": sc,
+                                 "episodes": int(by_scene.loc[sc, "count"]), metric: float(grid[i, j])})
         im = ax.imshow(np.ma.masked_invalid(grid * 100), vmin=0, vmax=100, cmap="viridis", aspect="auto")
         for i in range(grid.shape[0]):
             for j in range(grid.shape[1]):
@@ -138,7 +153,7 @@ def scene_heatmap(subs: list[LoadedSubmission], metric: str = "success") -> Figu
         fig.colorbar(im, ax=ax, fraction=0.03)
     fig.tight_layout()
     return Figure(f"scenes_{metric}", f"Mean team {metric} (%) per method and scene (splits and team sizes "
-                  "pooled; blank: no episodes).", _png(fig))
+                  "pooled; blank: no episodes).", png_bytes(fig), pd.DataFrame(rows))
 
 
 def agents_breakdown(tracks: list[TrackTable], names: list[str]) -> Figure:
@@ -168,8 +183,12 @@ def agents_breakdown(tracks: list[TrackTable], names: list[str]) -> Figure:
             ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=8)
     fig.tight_layout()
+    table = pd.DataFrame([{"split": t.split, "task": t.task, "agents": t.agents, "method": e.submission.name,
+                           "metric": m, "mean": e.metrics[m].mean, "ci_low": e.metrics[m].lo,
+                           "ci_high": e.metrics[m].hi, "episodes": e.episodes}
+                          for t in tracks for e in t.entries for m in ("success", "spl")])
     return Figure("agents", "Team success and SPL against the number of agents, with 95% bootstrap intervals.",
-                  _png(fig))
+                  png_bytes(fig), table)
 
 
 def section_figures(subs: list[LoadedSubmission], tracks: list[TrackTable], settings: TableSettings

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+import pandas as pd
 
 from .submissions import Submission
 from .tables import Table2, TrackTable
@@ -14,11 +16,16 @@ LEADERBOARD_SCHEMA_VERSION = 1
 
 @dataclass(frozen=True)
 class Figure:
-    """One plot of the report: a file name stem, a caption and the PNG bytes."""
+    """One plot of the report: a file name stem, a caption, the PNG bytes and the numbers drawn (CSV)."""
 
     name: str
     caption: str
     png: bytes
+    table: pd.DataFrame = field(default_factory=pd.DataFrame, compare=False, repr=False)
+
+    def csv_text(self) -> str:
+        """The plotted numbers as CSV (6 significant digits)."""
+        return self.table.to_csv(index=False, float_format="%.6g")
 
 
 @dataclass(frozen=True)

@@ -130,13 +130,13 @@ def legend_handles(n: int) -> list[Line2D]:
     ]
 
 
-def episode_title(view: EpisodeView) -> str:
-    """`<episode> · <scene> · <task>, N agents · team success / SPL · submission`."""
+def episode_title(view: EpisodeView, note: bool = True) -> str:
+    """Two lines: `<episode> · <scene> · <task>, N agents` and `<submission>: team verdict, SPL, steps (note)`."""
     ep, team = view.episode, view.team_record
     verdict = "success" if float(team["success"]) >= 0.5 else "failure"
     return (f"{ep.episode_id} · {ep.scene_id} · {ep.task}-target, {ep.num_agents} agents\n"
-            f"{view.submission}: team {verdict}, SPL {float(team['spl']):.2f}, {int(team['steps'])} steps "
-            f"({view.note})")
+            f"{view.submission}: team {verdict}, SPL {float(team['spl']):.2f}, {int(team['steps'])} steps"
+            + (f" ({view.note})" if note else ""))
 
 
 def episode_figure(view: EpisodeView):

@@ -100,14 +100,18 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol):
 
 @njit(cache=True)
 def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64)):
-    """Multi-source any-angle Dijkstra. Returns (g, anchor) per node; anchor -1 where unreached."""
+    """Multi-source any-angle Dijkstra. Returns (g, anchor, root) per node; anchor and root -1 where unreached.
+
+    root: the index of the target whose propagation reached the node (the end of its path).
+    """
     n = nbr.shape[0]
     g = np.full(n, np.inf)
     anchor = np.full(n, -1, np.int64)
+    root = np.full(n, -1, np.int64)
     klo = np.full(n, -np.inf)
     khi = np.full(n, np.inf)
     done = np.zeros(n, np.bool_)
-    cap = n * 8 + tnode.shape[0] + 1
+    cap = n * 8 + 9 * tnode.shape[0] + 1
     hk = np.empty(cap)
     hv = np.empty(cap, np.int64)
     size = 0
@@ -161,6 +165,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64
         done[u] = True
         stats[3] += 1
         s = anchor[u]
+        root[u] = s - n if s >= n else root[s]
         sx, sy, sz = _anchor_pos(s, n, px, py, pz, tpos)
         ds = 0.0 if s >= n else g[s]
         for d in range(8):
@@ -234,7 +239,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64
                 klo[v] = blo
                 khi[v] = bhi
                 size = _heap_push(hk, hv, size, best, v)
-    return g, anchor
+    return g, anchor, root
 
 
 @njit(cache=True)
@@ -306,8 +311,12 @@ def locate_near(points, nodes, x0, y0, cs, nx, ny, col_start, z, below, above, r
 
 
 @njit(cache=True)
-def lookup(points, nodes, g, anchor, px, py, pz, tpos, x0, y0, cs, ix, iy):
-    """Distance from each point through its node's anchor; inf for nodes -1 or unreached."""
+def lookup(points, nodes, g, anchor, root, px, py, pz, z, tpos, tsurf, x0, y0, cs, ix, iy):
+    """Distance from each point through its node's anchor; inf for nodes -1 or unreached.
+
+    Never less than the straight line from the point (clamped into its cell, at its surface height z) to the
+    target its path ends at (tsurf): smoothed heights on stairs must not make a path shorter than that.
+    """
     m = points.shape[0]
     n = g.shape[0]
     out = np.full(m, np.inf)
@@ -326,5 +335,10 @@ def lookup(points, nodes, g, anchor, px, py, pz, tpos, x0, y0, cs, ix, iy):
         dx = qx - sx
         dy = qy - sy
         dz = pz[v] - sz
-        out[i] = ds + np.sqrt(dx * dx + dy * dy + dz * dz)
+        d = ds + np.sqrt(dx * dx + dy * dy + dz * dz)
+        j = root[v]
+        ex = qx - tsurf[j, 0]
+        ey = qy - tsurf[j, 1]
+        ez = z[v] - tsurf[j, 2]
+        out[i] = max(d, np.sqrt(ex * ex + ey * ey + ez * ez))
     return out

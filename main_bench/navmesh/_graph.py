@@ -47,31 +47,77 @@ def _heap_pop(hk, hv, size):
 
 
 @njit(cache=True)
-def clearance(nbr, ix, iy, limit):
-    """Distance in cells from each node centre to the nearest blocked cell square (capped at `limit`).
+def _rect_dist(px, py, r):
+    ex = max(r[0] - px, 0.0, px - r[2])
+    ey = max(r[1] - py, 0.0, py - r[3])
+    return np.sqrt(ex * ex + ey * ey)
 
-    A direction without a link counts as a blocked cell there; the nearest blocked cell is carried along
-    the graph (vector propagation), so distances are Euclidean to within a fraction of a cell.
+
+@njit(cache=True)
+def blocking_rects(nbr, ix, iy, z, nx, ny, span_start, szlo, szhi, srect, x0, y0, cs, max_climb, agent_height):
+    """(N, 8, 4) what stops each node's missing links, as rectangles in cell units (x0, y0, x1, y1).
+
+    The rectangle is the extent, within the neighbour column, of the geometry that blocks the agent's body
+    there (spans rising above max_climb and below agent_height): walls are located to within their true
+    position, not rounded to whole cells. Where no such geometry exists (a ledge, the grid's edge) it is the
+    neighbour's whole cell square. Rows of existing links, and of diagonals missing only because one of
+    their sides is blocked, are NaN (no obstacle).
+    """
+    n = nbr.shape[0]
+    out = np.full((n, 8, 4), np.nan)
+    for u in range(n):
+        for d in range(8):
+            if nbr[u, d] >= 0:
+                continue
+            jx = ix[u] + DX[d]
+            jy = iy[u] + DY[d]
+            bx0 = np.inf
+            by0 = np.inf
+            bx1 = -np.inf
+            by1 = -np.inf
+            if 0 <= jx < nx and 0 <= jy < ny:
+                c = jy * nx + jx
+                for k in range(span_start[c], span_start[c + 1]):
+                    if szhi[k] > z[u] + max_climb and szlo[k] < z[u] + agent_height:
+                        bx0 = min(bx0, (srect[k, 0] - x0) / cs)
+                        by0 = min(by0, (srect[k, 1] - y0) / cs)
+                        bx1 = max(bx1, (srect[k, 2] - x0) / cs)
+                        by1 = max(by1, (srect[k, 3] - y0) / cs)
+            if bx0 > bx1:
+                if d >= 4 and (nbr[u, d - 4] < 0 or nbr[u, (d - 3) % 4] < 0):
+                    continue  # a diagonal cut off by a blocked side: that side's geometry counts, not this cell
+                bx0, by0, bx1, by1 = float(jx), float(jy), float(jx + 1), float(jy + 1)
+            out[u, d, 0] = bx0
+            out[u, d, 1] = by0
+            out[u, d, 2] = bx1
+            out[u, d, 3] = by1
+    return out
+
+
+@njit(cache=True)
+def clearance(nbr, ix, iy, rects, limit):
+    """Distance in cells from each node centre to the nearest blocking rectangle (capped at `limit`).
+
+    `rects` comes from `blocking_rects`. The nearest rectangle is carried along the graph (vector
+    propagation), so distances are Euclidean to within a fraction of a cell.
     """
     n = nbr.shape[0]
     dist = np.full(n, np.inf)
-    ox = np.zeros(n, np.int64)
-    oy = np.zeros(n, np.int64)
+    best = np.zeros((n, 4))
     done = np.zeros(n, np.bool_)
     cap = n * 9 + 1
     hk = np.empty(cap)
     hv = np.empty(cap, np.int64)
     size = 0
     for u in range(n):
+        cx = ix[u] + 0.5
+        cy = iy[u] + 0.5
         for d in range(8):
-            if nbr[u, d] < 0:
-                ex = max(abs(DX[d]) - 0.5, 0.0)
-                ey = max(abs(DY[d]) - 0.5, 0.0)
-                dd = np.sqrt(ex * ex + ey * ey)
+            if nbr[u, d] < 0 and not np.isnan(rects[u, d, 0]):
+                dd = _rect_dist(cx, cy, rects[u, d])
                 if dd < dist[u]:
                     dist[u] = dd
-                    ox[u] = ix[u] + DX[d]
-                    oy[u] = iy[u] + DY[d]
+                    best[u] = rects[u, d]
         if dist[u] < np.inf:
             size = _heap_push(hk, hv, size, dist[u], u)
     while size > 0:
@@ -85,20 +131,52 @@ def clearance(nbr, ix, iy, limit):
             v = nbr[u, d]
             if v < 0 or done[v]:
                 continue
-            ex = max(abs(ix[v] - ox[u]) - 0.5, 0.0)
-            ey = max(abs(iy[v] - oy[u]) - 0.5, 0.0)
-            dd = np.sqrt(ex * ex + ey * ey)
+            dd = _rect_dist(ix[v] + 0.5, iy[v] + 0.5, best[u])
             if dd < dist[v]:
                 dist[v] = dd
-                ox[v] = ox[u]
-                oy[v] = oy[u]
+                best[v] = best[u]
                 size = _heap_push(hk, hv, size, dd, v)
-    return dist
+    return dist, best
 
 
 @njit(cache=True)
-def compact_links(nbr, keep):
-    """Links among kept nodes, renumbered; diagonals must be recomputed afterwards."""
+def relax_diagonals(nbr_pre, keep, nbr, ix, iy, best, thr):
+    """Add diagonal links between kept nodes (renumbered `nbr`) that erosion alone cut.
+
+    A diagonal that existed before erosion (no geometry between) is restored when the corner point it passes
+    is at least `thr` cells from the obstacles nearest to the four cells around it: the strict rule (both
+    sides kept) would make paths step around corners that are in fact clear.
+    """
+    n = nbr_pre.shape[0]
+    new_id = np.full(n, -1, np.int64)
+    m = 0
+    for u in range(n):
+        if keep[u]:
+            new_id[u] = m
+            m += 1
+    for u in range(n):
+        if not keep[u]:
+            continue
+        for q in range(4):
+            v = nbr_pre[u, 4 + q]
+            if v < 0 or not keep[v] or nbr[new_id[u], 4 + q] >= 0:
+                continue
+            a = nbr_pre[u, q]
+            b = nbr_pre[u, (q + 1) % 4]
+            cx = ix[u] + 0.5 + 0.5 * DX[4 + q]
+            cy = iy[u] + 0.5 + 0.5 * DY[4 + q]
+            c = min(_rect_dist(cx, cy, best[u]), _rect_dist(cx, cy, best[v]),
+                    _rect_dist(cx, cy, best[a]), _rect_dist(cx, cy, best[b]))
+            if c >= thr:
+                nbr[new_id[u], 4 + q] = new_id[v]
+                nbr[new_id[v], 4 + (q + 2) % 4] = new_id[u]
+    return nbr
+
+
+@njit(cache=True)
+def compact_links(nbr, keep, ndirs=4):
+    """Links among kept nodes, renumbered. With ndirs=4 diagonals must be recomputed afterwards; ndirs=8 keeps
+    them (right when whole components are removed)."""
     n = nbr.shape[0]
     new_id = np.full(n, -1, np.int64)
     m = 0
@@ -110,7 +188,7 @@ def compact_links(nbr, keep):
     for u in range(n):
         if not keep[u]:
             continue
-        for d in range(4):
+        for d in range(ndirs):
             v = nbr[u, d]
             if v >= 0 and keep[v]:
                 out[new_id[u], d] = new_id[v]

@@ -39,9 +39,10 @@ def _clip(px, py, pz, n, axis, bound, keep_ge, ox, oy, oz):
 
 @njit(cache=True)
 def rasterize(verts, faces, x0, y0, cs, nx, ny, min_normal_z):
-    """Clip every triangle to every column it touches; returns spans (col, zlo, zhi, kind).
+    """Clip every triangle to every column it touches; returns spans (col, zlo, zhi, kind, rect).
 
     kind: 1 flat enough to walk on (facing up), 2 flat facing down, 0 anything else.
+    rect: (S, 4) x and y extent of the clipped piece (xmin, ymin, xmax, ymax, m): where in its column it lies.
     """
     nf = faces.shape[0]
     eps = 1e-6 * cs
@@ -59,6 +60,7 @@ def rasterize(verts, faces, x0, y0, cs, nx, ny, min_normal_z):
     zlo = np.empty(total, np.float64)
     zhi = np.empty(total, np.float64)
     kind = np.empty(total, np.int8)
+    rect = np.empty((total, 4))
     ax = np.empty(16)
     ay = np.empty(16)
     az = np.empty(16)
@@ -132,8 +134,12 @@ def rasterize(verts, faces, x0, y0, cs, nx, ny, min_normal_z):
                 zlo[k] = lo
                 zhi[k] = hi
                 kind[k] = tkind
+                rect[k, 0] = max(minx, cx0)
+                rect[k, 1] = max(miny, cy0)
+                rect[k, 2] = min(maxx, cx1)
+                rect[k, 3] = min(maxy, cy1)
                 k += 1
-    return col[:k], zlo[:k], zhi[:k], kind[:k]
+    return col[:k], zlo[:k], zhi[:k], kind[:k], rect[:k]
 
 
 @njit(cache=True)

@@ -41,7 +41,7 @@ class DistanceField:
         self._tpos = np.ascontiguousarray(tpos)
         self._tpos_surface = tpos.copy()
         self._tpos_surface[:, 2] = g.z[safe]
-        self._g, self._anchor = _field.propagate(g.nbr, navmesh._px, navmesh._py, g.zs, nodes, self._tpos,
+        self._g, self._anchor, self._root = _field.propagate(g.nbr, navmesh._px, navmesh._py, g.zs, nodes, self._tpos,
                                                  LINE_Z_TOLERANCE, g.cell_size)
 
     @property
@@ -65,8 +65,8 @@ class DistanceField:
         nm = self.navmesh
         g = nm._grid
         nodes = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
-        d = _field.lookup(pts, nodes, self._g, self._anchor, nm._px, nm._py, g.zs, self._tpos, g.x0, g.y0,
-                          g.cell_size, g.ix, g.iy)
+        d = _field.lookup(pts, nodes, self._g, self._anchor, self._root, nm._px, nm._py, g.zs, g.z, self._tpos,
+                          self._tpos_surface, g.x0, g.y0, g.cell_size, g.ix, g.iy)
         return float(d[0]) if single else d
 
     def path(self, point: np.ndarray) -> np.ndarray:

@@ -119,7 +119,7 @@ class NavMesh:
     @classmethod
     def build_cached(cls, scene: Any, settings: NavMeshSettings, cache_dir: str | Path) -> NavMesh:
         """Like `build`, reusing `cache_dir/<scene_id>-<key>.navmesh` keyed by geometry, settings, algorithm."""
-        key = build_key(geometry_hash(scene.vertices, scene.faces), settings)
+        key = cls.key_of(scene, settings)
         path = Path(cache_dir) / f"{scene.scene_id}-{key[:20]}.navmesh"
         if path.is_file():
             try:
@@ -131,6 +131,11 @@ class NavMesh:
         nm = cls.build(scene, settings)
         nm.save(path)
         return nm
+
+    @staticmethod
+    def key_of(scene: Any, settings: NavMeshSettings) -> str:
+        """The cache key a navmesh of `scene` built with `settings` gets (compare with `build_key`)."""
+        return build_key(geometry_hash(scene.vertices, scene.faces), settings)
 
     @property
     def build_key(self) -> str:

@@ -114,7 +114,7 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
     `up`: the file's up axis; "auto" uses the geometry (and glTF's +Y rule when the geometry agrees).
     `scale`: metres per file unit; None detects centimetre and millimetre files from their size.
     Raises `SceneError` (exit code 2 in the CLI) for a missing file, a file that is not a mesh, no
-    triangles, non-finite vertices, or an absurd size.
+    triangles (or only zero-area ones), non-finite vertices, or an absurd size.
     """
     path = Path(path)
     if not path.exists():
@@ -143,6 +143,10 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
         faces.append(np.asarray(p.faces, dtype=np.int64) + offset)
         offset += len(p.vertices)
     faces_all = np.concatenate(faces)
+    tri = vertices[faces_all]
+    if not np.any(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]).any(axis=1)):
+        raise SceneError(f"all {len(faces_all)} triangles are degenerate (zero area); no surface to walk on",
+                         path=path)
 
     is_gltf = path.suffix.lower() in (".glb", ".gltf")
     up_axis, up_reason = _decide_up(vertices, faces_all, up, is_gltf)

@@ -19,6 +19,8 @@ from .procedural.materials import FLOOR_COLORS
 #: Geometry between these heights above a floor is drawn as an obstacle (agent body height, metres).
 BODY_BAND = (0.25, 1.6)
 MAX_PANELS = 4
+#: White box behind object labels, so they read on top of the obstacle fill.
+_LABEL_BOX = {"facecolor": "white", "alpha": 0.75, "pad": 0.6, "lw": 0}
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,20 @@ def _sidecar(scene: Scene) -> dict | None:
 
 def render_preview(scene: Scene, out: str | Path, dpi: int = 110) -> Path:
     """Draw the top-down preview of `scene` and write it to `out` (PNG, atomically). Returns `out`."""
+    import matplotlib.pyplot as plt
+
+    fig = preview_figure(scene)
+    out = Path(out)
+    try:
+        with atomic_path(out, suffix=".png") as tmp:
+            fig.savefig(tmp, format="png", dpi=dpi)
+    finally:
+        plt.close(fig)
+    return out
+
+
+def preview_figure(scene: Scene):  # -> matplotlib.figure.Figure (imported lazily)
+    """The top-down preview as a matplotlib figure: one panel per floor, rooms and objects labelled."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -113,16 +129,19 @@ def render_preview(scene: Scene, out: str | Path, dpi: int = 110) -> Path:
         if floor_tris.any() and not rooms:
             ax.add_collection(PolyCollection(tri[floor_tris][:, :, :2], facecolors="#e8e4da", edgecolors="none"))
         if band.any():
-            ax.add_collection(PolyCollection(tri[band][:, :, :2], facecolors="#555555", edgecolors="#555555",
-                                             linewidths=1.0))
+            ax.add_collection(PolyCollection(tri[band][:, :, :2], facecolors="#8f8f8f", edgecolors="#6f6f6f",
+                                             linewidths=0.8))
         for o in scene.objects:
             if not (lev.z - 0.3 <= o.bbox_min[2] < lev.top - 0.05):
                 continue
             x0, y0 = o.bbox_min[0], o.bbox_min[1]
             ax.add_patch(Rectangle((x0, y0), o.bbox_max[0] - x0, o.bbox_max[1] - y0, facecolor="none",
                                    edgecolor=_category_color(o.category), linewidth=1.2))
-            ax.text(o.center[0], o.center[1], o.category.replace("_", " "), ha="center", va="center", fontsize=5.5,
-                    color=_category_color(o.category))
+            # Objects standing on others or hung on walls are labelled above their box, clear of the one below.
+            raised = o.bbox_min[2] - lev.z > 0.3
+            ax.text(o.center[0], o.bbox_max[1] if raised else o.center[1], o.category.replace("_", " "), ha="center",
+                    va="bottom" if raised else "center", fontsize=5.5, color=_category_color(o.category),
+                    bbox=_LABEL_BOX)
         ax.set_xlim(lo[0] - 0.3, hi[0] + 0.3)
         ax.set_ylim(lo[1] - 0.3, hi[1] + 0.3)
         ax.set_aspect("equal")
@@ -133,11 +152,7 @@ def render_preview(scene: Scene, out: str | Path, dpi: int = 110) -> Path:
         ax.set_title(title, fontsize=10)
     fig.suptitle(f"{scene.scene_id}: {scene.triangle_count:,} triangles, {len(scene.objects)} objects", fontsize=11)
     fig.tight_layout()
-    out = Path(out)
-    with atomic_path(out, suffix=".png") as tmp:
-        fig.savefig(tmp, format="png", dpi=dpi)
-    plt.close(fig)
-    return out
+    return fig
 
 
 def _category_color(category: str) -> tuple[float, float, float]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..errors import InputError
 
@@ -81,6 +82,19 @@ class SimSettings:
         if self.camera.height_m > self.agent_height:
             raise InputError(f"camera height_m={self.camera.height_m} is above agent_height={self.agent_height}; "
                              "lower the camera or raise the agent")
+
+    @classmethod
+    def for_agent_body(cls, navmesh_settings: Any, **overrides: Any) -> SimSettings:
+        """Settings whose agent body (radius, height, max climb) is the one a navmesh, hence a data set, was
+        built for: `navmesh_settings` is a `NavMeshSettings` (e.g. `Manifest.navmesh()`) or its JSON dict;
+        `overrides` set any other field (actions, camera, renderer, noise)."""
+        get = navmesh_settings.__getitem__ if isinstance(navmesh_settings, dict) else navmesh_settings.__getattribute__
+        try:
+            body = {name: float(get(name)) for name in ("agent_radius", "agent_height", "max_climb")}
+        except (AttributeError, KeyError, TypeError, ValueError) as exc:
+            raise InputError(f"navmesh settings {navmesh_settings!r} lack the agent body ({exc}); give "
+                             "agent_radius, agent_height and max_climb in metres") from None
+        return cls(**{**body, **overrides})
 
     @property
     def turn_angle(self) -> float:

@@ -12,6 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from ..errors import MainBenchError  # noqa: E402
 from .figures import StatsFigure, png_bytes  # noqa: E402
@@ -89,7 +90,7 @@ def density_figure(frame: pd.DataFrame, smap: SceneMap, bin_m: float = 0.5) -> S
                        color="#d9d9d9", linewidths=0, rasterized=True)
         masked = np.ma.masked_equal(hist.T, 0)
         im = ax.pcolormesh(ex, ey, masked, cmap="magma_r", alpha=0.9, vmin=0)
-        fig.colorbar(im, ax=ax, fraction=0.04, label="count")
+        fig.colorbar(im, ax=ax, fraction=0.04, label="count", ticks=MaxNLocator(integer=True))
         ax.set_aspect("equal")
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)

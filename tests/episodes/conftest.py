@@ -30,8 +30,8 @@ def ep_cache(tmp_path_factory) -> Path:
 def gen(cli, ep_scenes, ep_cache):
     """`gen(out, *extra)`: `main-bench episodes generate` on the analytic scenes with small defaults, --json."""
 
-    def run(out: Path, *extra: object, per_scene: int = 24):
-        args = ["episodes", "generate", "--scenes", ep_scenes / "scenes", "--splits", ep_scenes / "splits.json",
+    def run(out: Path, *extra: object, per_scene: int = 24, scenes: Path | None = None):
+        args = ["episodes", "generate", "--scenes", scenes or ep_scenes / "scenes", "--splits", ep_scenes / "splits.json",
                 "--out", out, "--cache-dir", ep_cache, "--per-scene", per_scene, "--json", *extra]
         if "--up" not in extra:
             args += ["--up", "z"]

@@ -20,7 +20,7 @@ from main_bench.io import sha256_file
 
 ALL_OPTIONS = ("--task", "both", "--agents", "1,2,3", "--min-distance", "1.5", "--max-distance", "8",
                "--success-distance", "0.5", "--seed", "7", "--workers", "1", "--executor", "local",
-               "--shard-size", "10", "--start-margin", "0.2", "--ratio-threshold", "1.05", "--goal-radius", "0.6",
+               "--shard-size", "10", "--start-margin", "0.2", "--ratio-threshold", "0", "--goal-radius", "0.6",
                "--max-rounds", "6", "--agent-radius", "0.2")
 
 
@@ -41,7 +41,7 @@ def test_generate_with_every_option(gen, tmp_path, ep_scenes):
     assert (s.tasks, s.agents, s.per_scene, s.seed, s.shard_size, s.max_rounds) == (
         ("shared", "individual"), (1, 2, 3), 24, 7, 10, 6)
     assert (s.min_distance, s.max_distance, s.success_distance, s.start_margin, s.ratio_threshold,
-            s.goal_radius) == (1.5, 8.0, 0.5, 0.2, 1.05, 0.6)
+            s.goal_radius) == (1.5, 8.0, 0.5, 0.2, 0.0, 0.6)
     assert m.navmesh_settings["agent_radius"] == 0.2 and m.seed == 7
     assert {k: (e.split, e.source) for k, e in m.scenes.items()} == {"box": ("val", "path"), "furn": ("test", "path")}
     assert all(len(e.hash) == 64 for e in m.scenes.values())
@@ -143,20 +143,20 @@ def test_ray_executor_gives_the_local_bytes(gen, tmp_path, local_ray):
 
 
 def test_sigkill_then_rerun_gives_the_uninterrupted_data(gen, tmp_path, ep_scenes, ep_cache):
-    opts = ("--shard-size", "10", "--agents", "2,3,4")
+    scene = ep_scenes / "scenes" / "furn.obj"
+    opts = ("--shard-size", "5", "--task", "both", "--agents", "2,3")
     ref = tmp_path / "ref"
-    assert gen(ref, *opts, per_scene=300).code == 0
+    assert gen(ref, *opts, per_scene=200, scenes=scene).code == 0
     out = tmp_path / "killed"
-    argv = ["episodes", "generate", "--scenes", str(ep_scenes / "scenes"), "--splits",
-            str(ep_scenes / "splits.json"), "--out", str(out), "--cache-dir", str(ep_cache), "--per-scene", "300",
-            "--json", *opts]
+    argv = ["episodes", "generate", "--scenes", str(scene), "--splits", str(ep_scenes / "splits.json"),
+            "--out", str(out), "--cache-dir", str(ep_cache), "--per-scene", "200", "--up", "z", "--json", *opts]
     code = f"import sys; from main_bench.cli.app import main; sys.exit(main({argv!r}))"
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:
         deadline = time.monotonic() + 120
         while len(list(out.glob("split=*/task=*/agents=*/*.parquet"))) < 5 and proc.poll() is None:
             assert time.monotonic() < deadline, "the generation run wrote no shard"
-            time.sleep(0.005)
+            time.sleep(0.002)
         os.kill(proc.pid, signal.SIGKILL)
     finally:
         proc.wait()
@@ -164,10 +164,10 @@ def test_sigkill_then_rerun_gives_the_uninterrupted_data(gen, tmp_path, ep_scene
     assert not (out / "manifest.json").exists()
     written = len(list(out.glob("split=*/task=*/agents=*/*.parquet")))
     assert 5 <= written < len(read_manifest(ref).shards)
-    r = gen(out, *opts, per_scene=300)
+    r = gen(out, *opts, per_scene=200, scenes=scene)
     assert r.code == 0, r.err
     doc = json.loads(r.out)
-    assert doc["shards_reused"] >= written - 1 and doc["shards_written"] > 0
+    assert doc["shards_reused"] == written and doc["shards_written"] == doc["shards"] - written
     assert dataset_bytes(out) == dataset_bytes(ref)
     leftovers = [p.name for p in out.rglob(".*")]
     assert leftovers == [], leftovers

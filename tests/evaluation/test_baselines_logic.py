@@ -89,11 +89,11 @@ def test_oracle_reaches_targets_and_calls_found_within_success_distance():
     world = ToyWorld([[0, 0, 0], [0, 2, 0]], [math.pi, 0.3], [[5, 0, 0], [-4, 6, 0]])
     calls, walked = play(OracleBaseline(seed=1), world, 2)
     assert set(calls) == {0, 1}
-    for i, (_, d) in calls.items():
+    for _, d in calls.values():
         assert d <= 1.0
     # Efficiency: walked about l - success distance, never much more than l.
-    l = np.array([5.0, math.hypot(4, 4)])
-    assert np.all(walked <= l + 0.3)
+    shortest = np.array([5.0, math.hypot(4, 4)])
+    assert np.all(walked <= shortest + 0.3)
 
 
 def test_oracle_goes_around_and_escapes_when_blocked():

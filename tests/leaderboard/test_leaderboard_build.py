@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -12,9 +13,11 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 from lb_fixtures import make_results
+from PIL import Image
 
 from main_bench.errors import ResultsError
 from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
+from main_bench.leaderboard.plots import DISTANCE_EDGES
 
 episodes_dir = lb_fixtures.episodes_dir
 three_results = lb_fixtures.three_results
@@ -22,17 +25,23 @@ METRICS = ("success", "spl", "soft_spl", "distance_to_goal", "steps", "collision
 FAST = LeaderboardSettings(plots=False, tables=TableSettings(n_resamples=200))
 
 
-def team_means(results_dir: Path) -> dict[str, dict[str, float]]:
-    """Recompute team means per track straight from the record part files (no main_bench reader)."""
-    out: dict[str, dict[str, float]] = {}
+def team_rows(results_dir: Path) -> pd.DataFrame:
+    """The team rows straight from the record part files (no main_bench reader), with task and track key."""
     frames = []
     for f in sorted((results_dir / "records").glob("split=*/task=*/agents=*/*.parquet")):
         split, task, agents = (p.split("=", 1)[1] for p in f.parts[-4:-1])
         df = pq.read_table(f).to_pandas()
         df["key"] = f"{split}/{task}/{agents}"
+        df["task"] = task
         frames.append(df)
     df = pd.concat(frames)
-    team = df[df["agent_index"] == -1]
+    return df[df["agent_index"] == -1]
+
+
+def team_means(results_dir: Path) -> dict[str, dict[str, float]]:
+    """Recompute team means per track straight from the record part files."""
+    out: dict[str, dict[str, float]] = {}
+    team = team_rows(results_dir)
     for key, g in team.groupby("key"):
         out[key] = {m: float(g[m].astype(np.float64).mean()) for m in METRICS} | {"episodes": len(g)}
     return out
@@ -72,7 +81,52 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
     assert [s["submission_metadata"]["baseline"] for s in section["submissions"]] == [False, True, True]
     assert readme.count("*(baseline)*") >= 2 and 'class="badge">baseline' in page
     assert "Table 2 shape: val · shared-target" in readme and "2 agents: Length" in readme
+    # Table 2 (MAIN paper shape): per agent count Length (steps), Distance (m), Success rate (%), SPL (%).
+    for task in ("shared", "individual"):
+        block = readme.split(f"### Table 2 shape: val · {task}-target")[1].split("###")[0]
+        assert "| Method | 2 agents: Length | 2 agents: Distance | 2 agents: Success rate (%) | 2 agents: SPL (%) " \
+               "| 3 agents: Length |" in block
+        for results_dir, name in zip(three_results, ("Strong method", "Greedy baseline"), strict=False):
+            row = next(line for line in block.splitlines() if line.startswith(f"| {name}"))
+            cells = [c.strip().split(" [")[0] for c in row.strip("|").split("|")][1:]
+            means = team_means(results_dir)
+            want = [txt for n in (2, 3) for txt in (f"{means[f'val/{task}/{n}']['steps']:.1f}",
+                                                    f"{means[f'val/{task}/{n}']['distance_to_goal']:.2f}",
+                                                    f"{100 * means[f'val/{task}/{n}']['success']:.1f}",
+                                                    f"{100 * means[f'val/{task}/{n}']['spl']:.1f}")]
+            assert cells == want, (task, name)
     assert len(list((tmp_path / "lb" / "plots").glob("*.png"))) == len(payload["plots"]) == 5
+    check_plots(tmp_path / "lb", three_results, page)
+
+
+def check_plots(out: Path, results: list[Path], page: str) -> None:
+    """Each plot is a non-blank PNG whose CSV holds the plotted numbers, recomputed here from the records."""
+    for png in sorted((out / "plots").glob("*.png")):
+        img = np.asarray(Image.open(png).convert("L"), dtype=np.float64)
+        assert min(img.shape) > 200 and img.std() > 10, png
+        assert png.with_suffix(".csv").is_file() and f"{png.stem}.csv" in page
+    teams = pd.concat([team_rows(r).assign(method=name) for r, name in
+                       zip(results, ("Strong method", "Greedy baseline", "Random baseline"), strict=True)])
+    edges = np.array(DISTANCE_EDGES)
+    teams["bin"] = [int(np.searchsorted(edges, v, side="right") - 1) for v in teams["geodesic_distance"]]
+    got = pd.read_csv(out / "plots" / "section0_success_by_distance.csv")
+    want = teams.groupby(["task", "method", "bin"])["success"].agg(["mean", "count"]).reset_index()
+    merged = want.merge(got, on=["task", "method", "bin"], how="outer", validate="one_to_one")
+    assert len(merged) == len(got) == len(want) and merged["episodes"].eq(merged["count"]).all()
+    np.testing.assert_allclose(merged["success"], merged["mean"], atol=1e-5)
+    assert (merged["ci_low"] <= merged["success"] + 1e-6).all() and (merged["success"] <= merged["ci_high"] + 1e-6).all()
+    got = pd.read_csv(out / "plots" / "section0_scenes_spl.csv")
+    want = teams.groupby(["task", "method", "scene_id"])["spl"].mean().rename("want").reset_index()
+    merged = want.merge(got, on=["task", "method", "scene_id"], validate="one_to_one")
+    assert len(merged) == len(got) == len(want)
+    np.testing.assert_allclose(merged["spl"], merged["want"], atol=1e-5)
+    got = pd.read_csv(out / "plots" / "section0_agents.csv")
+    for r in got.itertuples():
+        mine = teams[(teams["method"] == r.method) & (teams["key"] == f"{r.split}/{r.task}/{r.agents}")]
+        assert r.mean == pytest.approx(mine[r.metric].mean(), abs=1e-5) and r.episodes == len(mine)
+    # Self-contained: every image is inline, nothing is fetched from anywhere.
+    assert re.findall(r'src="(?!data:)', page) == [] and "<link" not in page and "url(" not in page
+    assert "@import" not in page and "<script" not in page.lower()
 
 
 def test_output_is_deterministic(tmp_path, three_results):

@@ -199,3 +199,42 @@ class Staircase:
     def clearance(self, p: np.ndarray) -> np.ndarray:
         """(N,) distance to the side and end walls (m), for points in the corridor."""
         return np.minimum.reduce([p[:, 1], self.width - p[:, 1], p[:, 0], 12.0 - p[:, 0]])
+
+
+def accuracy_report(offsets=((0.0, 0.0), (0.013, 0.031), (0.037, 0.004), (0.025, 0.025)), seed: int = 1) -> list[dict]:
+    """Relative error of navmesh geodesics against the exact lengths, per layout and grid offset (paths >= 2 m).
+
+    Run `python tests/navmesh/nav_layouts.py` to print it (the figures of docs/navmesh.md).
+    """
+    from main_bench.navmesh import NavMesh, NavMeshSettings
+
+    s = NavMeshSettings()
+    rows = []
+    for layout in (*FLAT_LAYOUTS, Staircase()):
+        for off in offsets:
+            shift = np.array([off[0], off[1], 0.0])
+            v, f = layout.mesh()
+            nm = NavMesh.from_triangles(v + shift, f, s)
+            island = int(nm.island_of(np.array([[0.6, 0.6, 0.0]]) + shift)[0])
+            pts = nm.sample(1000, np.random.default_rng(seed), island=island) - shift
+            ok = layout.clearance(pts) >= s.agent_radius + 0.03
+            if isinstance(layout, Staircase):
+                ok &= (pts[:, 0] < 3.8) | (pts[:, 0] > 8.1)
+            pts = pts[ok]
+            rel, below = [], []
+            for t in pts[:8]:
+                got = nm.distance_field(t + shift).distance(pts[8:] + shift)
+                exact = layout.exact_distances(pts[8:], t, s.agent_radius)
+                long = exact >= 2.0
+                rel.append((got[long] - exact[long]) / exact[long])
+                below.append(got - np.linalg.norm(pts[8:] - t, axis=1))
+            r = np.concatenate(rel)
+            rows.append({"layout": layout.name, "offset": off, "pairs": len(r), "max_abs": float(np.abs(r).max()),
+                         "mean_abs": float(np.abs(r).mean()), "most_below_straight_m": float(-np.concatenate(below).min())})
+    return rows
+
+
+if __name__ == "__main__":
+    for row in accuracy_report():
+        print(f"{row['layout']:15s} offset {row['offset']}: {row['pairs']:5d} pairs, max {100 * row['max_abs']:.2f}%, "
+              f"mean {100 * row['mean_abs']:.3f}%, below straight line by at most {row['most_below_straight_m']:.4f} m")

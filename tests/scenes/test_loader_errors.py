@@ -106,3 +106,34 @@ def test_up_override_and_auto(tmp_path):
     forced = load_scene(y_up, up="z")
     assert forced.up_axis == "z" and forced.up_reason == "given"
     assert np.allclose(np.ptp(forced.vertices, axis=0), [8, 2.5, 6])
+
+
+def test_degenerate_triangles_only(cli, tmp_path):
+    v = np.array([[0, 0, 0], [3, 0, 0], [6, 0, 0], [0, 4, 1]], dtype=float)  # collinear and repeated corners
+    path = write_obj(tmp_path / "flat.obj", v, np.array([[0, 1, 2], [3, 3, 1]]))
+    _refused(cli("scenes", "info", path), path, "degenerate", "2 triangles")
+
+
+def test_gltf_without_triangles_or_not_a_mesh(cli, tmp_path):
+    import trimesh
+
+    cloud = tmp_path / "points.glb"
+    cloud.write_bytes(trimesh.Scene(trimesh.PointCloud(np.random.default_rng(2).random((30, 3)) * 4))
+                      .export(file_type="glb"))
+    _refused(cli("scenes", "info", cloud), cloud, "no triangles")
+    notes = tmp_path / "notes.gltf"
+    notes.write_text('{"hello": "this is JSON but not a glTF scene"}')
+    _refused(cli("scenes", "info", notes), notes)
+    text = tmp_path / "readme.ply"
+    text.write_text("just some words\n")
+    _refused(cli("scenes", "info", text), text, "not a readable PLY")
+
+
+def test_up_override_through_the_cli(cli, tmp_path):
+    y_up = box_obj(tmp_path / "y.obj", (8, 6, 2.5), z_up=False)
+    auto = json.loads(cli("scenes", "info", y_up, "--json").out)
+    assert auto["up_axis"] == "y" and auto["up_reason"].startswith("geometry")
+    assert auto["size"] == pytest.approx([8, 6, 2.5]) and auto["bounds_min"][2] == pytest.approx(0.0)
+    forced = json.loads(cli("scenes", "info", y_up, "--up", "z", "--json").out)
+    assert forced["up_axis"] == "z" and forced["up_reason"] == "given"
+    assert forced["size"] == pytest.approx([8, 2.5, 6])

@@ -75,6 +75,18 @@ def test_nav_reference_is_nav_test_scaled(real_scenes):
     assert np.all(small <= big + 0.05) and np.all(small > big - 1.0)
 
 
+def test_nav_reference_area_and_offset(real_scenes):
+    """README: 552 triangles, 176.86 m^2 of navmesh, nav_test scaled by 0.2 and raised by 0.740358 (+Y up)."""
+    ref = load_scene(real_scenes / "ref_three_pathfinding_level.nav.glb")
+    level = load_scene(real_scenes / "recast_nav_test.obj")
+    tri = ref.vertices[ref.faces]
+    area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum() / 2
+    assert area == pytest.approx(176.86, abs=0.05)
+    # The navmesh lies on the level's walkable surfaces: its heights span the level's scaled heights, moved up.
+    lo, hi = level.bounds[:, 2] * 0.2 + 0.740358
+    assert lo - 0.3 <= ref.bounds[0, 2] and ref.bounds[1, 2] <= hi + 0.3
+
+
 def test_aws_house_node_name_objects(real_scenes):
     scene = load_scene(real_scenes / "aws_small_house_visual_yup.glb")
     cats = {o.category for o in scene.objects}
@@ -90,11 +102,16 @@ def test_aws_house_node_name_objects(real_scenes):
     assert 1.5 < fridge.bbox_max[2] - fridge.bbox_min[2] < 2.2
 
 
-def test_scenes_info_json_on_real_scene(cli, real_scenes):
+@pytest.mark.parametrize("name,triangles,sx,sy", REAL)
+def test_scenes_info_json_on_real_scene(cli, real_scenes, name, triangles, sx, sy):
     import json
 
-    r = cli("scenes", "info", real_scenes / "habitat_simple_room_zup.glb", "--json")
+    r = cli("scenes", "info", real_scenes / name, "--json")
     assert r.code == 0, r.err
     doc = json.loads(r.out)
     assert doc["schema_version"] == 1 and doc["command"] == "scenes info"
-    assert doc["triangles"] == 84 and doc["up_axis"] == "z" and len(doc["content_hash"]) == 64
+    assert doc["triangles"] == triangles and len(doc["content_hash"]) == 64 and doc["scale"] == 1.0
+    assert doc["up_axis"] == ("z" if name.endswith("_zup.glb") else "y")
+    if sx is not None:
+        assert doc["size"][:2] == pytest.approx([sx, sy], abs=0.15)
+    assert doc["object_count"] == len(doc["objects"])

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import networkx as nx
 import numpy as np
 import pytest
@@ -14,6 +12,8 @@ from main_bench.io import read_json, sha256_file
 from main_bench.scenes import KNOWN_CATEGORIES, load_scene
 from main_bench.scenes.procedural import generate_house, write_house
 from main_bench.scenes.procedural.layout import overlaps
+from main_bench.scenes.procedural.materials import CATEGORY_COLORS, FLOOR_COLORS
+from main_bench.scenes.procedural.recipes import RECIPES
 
 AGENT_RADIUS = 0.18
 MAX_CLIMB = 0.2
@@ -172,10 +172,79 @@ def test_colours_differ_by_room_type_and_category(tmp_path):
     assert len(colors) >= 15
     floor_cols = {tuple(b.color) for n, g in h.structure if n.startswith("floor_") for b in g}
     assert len(floor_cols) == len({r.type for r in h.rooms})
+    # Every category the recipes use has a base colour of its own, every room type a floor of its own.
+    used = {item.category for items in RECIPES.values() for item in items}
+    assert used <= set(CATEGORY_COLORS)
+    assert len({CATEGORY_COLORS[c] for c in used}) == len(used)
+    assert len(set(FLOOR_COLORS.values())) == len(FLOOR_COLORS) and set(RECIPES) == set(FLOOR_COLORS)
 
 
-def test_generation_is_fast():
-    start = time.perf_counter()
-    for seed in range(100, 105):
-        generate_house(seed)
-    assert (time.perf_counter() - start) / 5 < 1.0
+def test_doorways_are_open_in_the_geometry(houses):
+    """No wall box blocks a doorway: the opening is free from the floor to 2 m, through the wall's thickness."""
+    for h in houses:
+        for d in h.doors:
+            z0 = h.floors[d.floor].z
+            along, across = (0, 1) if d.axis == "x" else (1, 0)
+            walls = [b for name, g in h.structure if name == f"walls_f{d.floor}" for b in g]
+            for b in walls:
+                blocks = (b.lo[along] < d.hi - 1e-6 and b.hi[along] > d.lo + 1e-6
+                          and b.lo[across] < d.line + 0.04 and b.hi[across] > d.line - 0.04
+                          and b.lo[2] < z0 + 2.0 and b.hi[2] > z0 + 0.01)
+                assert not blocks, (h.house_id, d, b)
+            # The doorway lies in the wall the two rooms share.
+            ra, rb = (next(r for r in h.rooms if r.name == n) for n in (d.a, d.b))
+            lo = max(ra.rect[along], rb.rect[along])
+            hi = min(ra.rect[along + 2], rb.rect[along + 2])
+            assert lo <= d.lo and d.hi <= hi
+            assert {ra.rect[across], ra.rect[across + 2]} & {rb.rect[across], rb.rect[across + 2]} == {d.line}
+
+
+def test_stairs_and_their_landings_are_free(houses):
+    """No furniture on the flight, the stairwell, or 0.9 m in front of its bottom and top steps."""
+    for h in houses:
+        for s in h.stairs:
+            axis = 0 if s.direction.endswith("x") else 1
+            sign = 1 if s.direction[0] == "+" else -1
+            lo, hi = s.rect[axis], s.rect[axis + 2]
+            bottom, top = (lo, hi) if sign > 0 else (hi, lo)
+            for fl, end in ((s.floor, bottom - sign * 0.9), (s.floor + 1, top + sign * 0.9)):
+                zone = list(s.rect)
+                zone[axis], zone[axis + 2] = min(lo, hi, end), max(lo, hi, end)
+                for f in h.furniture:
+                    room = next(r for r in h.rooms if r.name == f.room)
+                    if room.floor == fl and f.bbox_min[2] < room.floor_z + 1.8:
+                        assert not overlaps(tuple(zone), (*f.bbox_min[:2], *f.bbox_max[:2])), (h.house_id, f.name)
+
+
+def test_same_house_in_another_process(tmp_path):
+    """Determinism does not hang on the process: another interpreter, another hash seed, same bytes."""
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    from main_bench.scenes.procedural import glb_bytes
+
+    seed = TWO_FLOOR_SEEDS[0]
+    code = ("import hashlib, sys; from main_bench.scenes.procedural import generate_house, glb_bytes; "
+            f"sys.stdout.write(hashlib.sha256(glb_bytes(generate_house({seed}))).hexdigest())")
+    env = {**os.environ, "PYTHONHASHSEED": "12345"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True).stdout
+    assert out == hashlib.sha256(glb_bytes(house(seed))).hexdigest()
+
+
+@pytest.mark.parametrize("seed", [0, 3, 23, TWO_FLOOR_SEEDS[0], TWO_FLOOR_SEEDS[1]])
+def test_every_room_is_on_the_main_navmesh_island(tmp_path, seed):
+    """For the default agent (radius 0.18 m, climb 0.2 m) one walkable island reaches into every room, on
+    both floors: doorways, furniture gaps and stairs really let it through."""
+    from main_bench.navmesh import NavMesh
+
+    h = house(seed)
+    nm = NavMesh.build(load_scene(write_house(h, tmp_path)))
+    main = max(nm.islands, key=lambda i: i.area)
+    assert main.area > 0.4 * h.total_area
+    for r in h.rooms:
+        x0, y0, x1, y1 = r.inner
+        xs, ys = np.meshgrid(np.arange(x0 + 0.1, x1 - 0.1, 0.1), np.arange(y0 + 0.1, y1 - 0.1, 0.1))
+        pts = np.stack([xs.ravel(), ys.ravel(), np.full(xs.size, r.floor_z)], axis=1)
+        assert np.any(nm.island_of(pts) == main.index), (h.house_id, r.name)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from main_bench.errors import InputError
-from main_bench.sim import SimSettings, Simulator
+from main_bench.sim import CameraSettings, SimSettings, Simulator
 from main_bench.sim.motion import agent_limit
 from main_bench.sim.synthetic import room, scene_from_boxes, staircase_room, thin_wall_room
 
@@ -160,6 +160,89 @@ def test_noise_is_deterministic_per_seed():
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[1], b[1])
     assert not np.allclose(a[0], c[0])
+    with Simulator(room(), None, settings, seed=1) as sim:  # each move and turn is perturbed
+        sim.reset([[1.0, 2.0, 0.0]], [0.0])
+        moved = [sim.step([1]).moved[0] for _ in range(6)]
+        sim.step([2])
+        assert all(abs(m - 0.25) > 1e-6 for m in moved) and np.std(moved) > 0.01
+        assert abs(sim.yaws[0] - math.radians(30)) > 1e-6
+
+
+def test_agent_body_and_actions_follow_the_settings():
+    """Radius, height and max climb from a data set's navmesh settings; step length and turn angle configurable."""
+    from main_bench.navmesh import NavMeshSettings
+
+    body = NavMeshSettings(agent_radius=0.3, agent_height=1.4, max_climb=0.1)
+    settings = SimSettings.for_agent_body(body.to_json(), forward_step=0.5, turn_angle_deg=45.0, renderer="tiny")
+    assert (settings.agent_radius, settings.agent_height, settings.max_climb) == (0.3, 1.4, 0.1)
+    assert SimSettings.for_agent_body(body, renderer="tiny") == SimSettings(0.3, 1.4, 0.1, renderer="tiny")
+    with Simulator(thin_wall_room(3.0, 0.1), None, settings) as sim:
+        sim.reset([[1.0, 2.0, 0.0], [1.0, 0.9, 0.0]], [0.0, 0.0])
+        out = sim.step([1, 2])
+        assert out.positions[0, 0] == pytest.approx(1.5) and out.moved[0] == pytest.approx(0.5)
+        assert out.yaws[1] == pytest.approx(math.pi / 4)
+        for _ in range(3):
+            out = sim.step([1, None])
+        assert out.collided[0] and out.positions[0, 0] == pytest.approx(3.0 - 0.3, abs=0.003)
+        # Agent 1 heads north-east into agent 0's disc: stopped 2 * 0.3 from its centre.
+        for _ in range(4):
+            out = sim.step([None, 1])
+        gap = np.linalg.norm(out.positions[1, :2] - out.positions[0, :2])
+        assert out.collided[1] and gap == pytest.approx(0.6, abs=0.003)
+    with Simulator(staircase_room(rise=0.15, run=0.3, steps=3), None, settings) as sim:
+        sim.reset([[1.2, 1.5, 0.0]], [0.0])
+        outs = [sim.step([1]) for _ in range(3)]
+        assert outs[-1].collided[0] and outs[-1].positions[0, 2] == 0.0  # 0.15 m > max climb 0.1 m
+    with pytest.raises(InputError, match="agent body"):
+        SimSettings.for_agent_body({"agent_radius": 0.2})
+
+
+def test_same_actions_same_trajectory_and_views():
+    """Deterministic: two simulators given the same start and actions agree exactly, observations included."""
+    rng = np.random.default_rng(8)
+    actions = [[int(a) for a in rng.choice([1, 1, 2, 3], size=3)] for _ in range(30)]
+    settings = SimSettings(renderer="tiny", camera=CameraSettings(width=32, height=24))
+
+    def run(seed):
+        with Simulator(room(), None, settings, seed=seed) as sim:
+            sim.reset([[1.0, 1.0, 0.0], [3.0, 2.0, 0.0], [5.0, 3.0, 0.0]], [0.0, 1.0, 2.0])
+            outs = [sim.step(a) for a in actions]
+            return np.stack([o.positions for o in outs]), np.stack([o.collided for o in outs]), sim.observe()
+
+    (p1, c1, (rgb1, d1)), (p2, c2, (rgb2, d2)) = run(0), run(99)  # no noise: the seed plays no part
+    np.testing.assert_array_equal(p1, p2)
+    np.testing.assert_array_equal(c1, c2)
+    np.testing.assert_array_equal(rgb1, rgb2)
+    np.testing.assert_array_equal(d1, d2)
+
+
+def test_builtin_house_stairs_are_climbed_and_descended(builtin_house):
+    """Walk up the straight flight of the two-storey built-in house (risers up to 0.17 m < max climb 0.2 m)
+    onto the upper floor, then back down; each move rises at most max climb."""
+    from main_bench.scenes.procedural import generate_house
+
+    flight = dict(generate_house(1).structure)["stairs_0"]
+    lo = np.array([b.lo for b in flight])
+    hi = np.array([b.hi for b in flight])
+    bottom, top = int(np.argmin(hi[:, 2])), int(np.argmax(hi[:, 2]))
+    axis = int(np.argmax(np.abs((lo[top] + hi[top] - lo[bottom] - hi[bottom])[:2])))  # 0: along x, 1: along y
+    sign = 1.0 if lo[top, axis] > lo[bottom, axis] else -1.0
+    start = (lo[bottom] + hi[bottom]) / 2.0
+    start[axis] -= sign * 0.6  # on the floor in front of the first step
+    start[2] = 0.0
+    yaw = math.atan2(sign * (axis == 1), sign * (axis == 0))
+    with Simulator(builtin_house(1), None, NO_RENDER) as sim:
+        sim.reset([start], [yaw])
+        zs = [0.0]
+        for _ in range(int(abs(hi[top, axis] - lo[bottom, axis]) / 0.25) + 8):
+            zs.append(sim.step([1]).positions[0, 2])
+        assert zs[-1] >= hi[top, 2] - 1e-6  # on the top step or the landing beyond it
+        assert np.all(np.diff(zs) >= -1e-9) and np.max(np.diff(zs)) <= 0.2 + 1e-9
+        for _ in range(6):
+            sim.step([2])
+        down = [sim.step([1]).positions[0, 2] for _ in range(len(zs))]
+        assert down[-1] == pytest.approx(0.0, abs=1e-6)
+        assert np.all(np.diff(down) <= 1e-9) and np.min(np.diff(down)) >= -0.2 - 1e-9
 
 
 def test_navmesh_keeps_agents_on_walkable_surface():

@@ -32,13 +32,17 @@ class OracleSettings:
     `found_fraction`: the agent walks on until it is within this fraction of the success distance (out of
     doorways, where as a done agent it would block the others), and calls `found` earlier only when blocked or
     about to run out of steps while within the success distance.
+
+    Defaults chosen on built-in val (240 episodes; docs/evaluation.md): look-ahead 0.3 m rather than 0.5 m cuts
+    fewer corners into walls (team SPL 0.79 -> 0.90), `found_fraction` 0.7 rather than 0.4 walks less (0.90 ->
+    0.91) at the same success.
     """
 
-    lookahead: float = 0.5
+    lookahead: float = 0.3
     replan_distance: float = 0.4
     escape_moves: int = 3
     stuck_after: int = 2
-    found_fraction: float = 0.4
+    found_fraction: float = 0.7
 
 
 @dataclass

@@ -12,7 +12,7 @@ from .stairs import StairPlan, plan_stairs
 from .structure import ceiling, exterior_walls, interior_walls, slab
 
 #: Changes whenever the same seed would give a different house; cached houses of another version are remade.
-GENERATOR_VERSION = "1.0.0"
+GENERATOR_VERSION = "1.1.0"
 #: Mixed with the user's seed so that the houses' random stream is their own.
 _STREAM_ID = 0x686F757365  # "house"
 #: One house in each block of this many consecutive seeds has two floors.
@@ -20,8 +20,11 @@ TWO_FLOOR_BLOCK = 5
 SLAB = 0.15
 GROUND_SLAB = 0.1
 
-_GROUND_TYPES = ("living_room", "kitchen", "bathroom")
-_GROUND_EXTRA = ("bedroom", "dining_room", "office", "bedroom", "bathroom", "bedroom", "office")
+_GROUND_TYPES = ("living_room", "kitchen", "bathroom", "bedroom")
+_GROUND_EXTRA = ("bedroom", "dining_room", "office", "bathroom", "bedroom", "office")
+#: Room types that need space (kitchen units, a table with chairs round it, a bed), most demanding first: they
+#: get the cells with the longest short side; the others (bathroom) take what is left.
+_SPACE_NEED = ("kitchen", "dining_room", "bedroom", "office")
 _UPPER_TYPES = ("bedroom", "bathroom")
 _UPPER_EXTRA = ("bedroom", "office", "bedroom", "bathroom")
 
@@ -132,9 +135,16 @@ def _room_types(rng: np.random.Generator, plan: FloorPlan, upper: bool, two_floo
     for _ in range(wanted.count("bathroom")):
         types[by_area.pop()] = "bathroom"
         wanted.remove("bathroom")
-    for i, t in zip(rng.permutation(by_area), wanted, strict=True):
-        types[int(i)] = t
+    # The cells left go to the types left: the widest cells to the types that need most space.
+    by_width = sorted(by_area, key=lambda i: (-_short_side(plan.cells[i]), i))
+    wanted.sort(key=lambda t: _SPACE_NEED.index(t) if t in _SPACE_NEED else len(_SPACE_NEED))
+    for i, t in zip(by_width, wanted, strict=True):
+        types[i] = t
     return types
+
+
+def _short_side(r: Rect) -> float:
+    return min(r[2] - r[0], r[3] - r[1])
 
 
 def _cell_area(r: Rect) -> float:

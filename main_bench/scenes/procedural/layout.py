@@ -165,7 +165,7 @@ def shared_edge(a: Rect, b: Rect) -> tuple[str, float, float, float] | None:
     return None
 
 
-def door_zone(door: Door, depth: float = 1.0, side: float = 0.2) -> Rect:
+def door_zone(door: Door, depth: float = 0.8, side: float = 0.15) -> Rect:
     """Plan rectangle that must stay free around a doorway: `depth` metres on both sides of the wall."""
     if door.axis == "x":
         return (door.lo - side, door.line - depth, door.hi + side, door.line + depth)

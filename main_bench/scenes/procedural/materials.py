@@ -1,4 +1,4 @@
-"""Colours of the procedural houses: floors and walls by room type, furniture by category.
+"""Colours of the procedural houses: floors by room type, furniture by category, structure.
 
 Colours are RGBA bytes stored as glTF vertex colours. Each category keeps a distinct base colour (with a small
 per-instance variation) so that RGB observations say something about what an agent sees.
@@ -18,15 +18,6 @@ FLOOR_COLORS: dict[str, RGBA] = {
     "bathroom": (95, 160, 185, 255),      # blue tiles
     "office": (110, 120, 105, 255),       # grey-green carpet
     "corridor": (175, 160, 130, 255),     # light stone
-}
-WALL_COLORS: dict[str, RGBA] = {
-    "living_room": (235, 225, 200, 255),
-    "kitchen": (245, 240, 220, 255),
-    "dining_room": (220, 200, 170, 255),
-    "bedroom": (215, 225, 240, 255),
-    "bathroom": (230, 245, 245, 255),
-    "office": (225, 235, 215, 255),
-    "corridor": (240, 235, 230, 255),
 }
 STRUCTURE_COLORS: dict[str, RGBA] = {
     "exterior_wall": (200, 195, 185, 255),

@@ -140,12 +140,13 @@ class House:
         return dict(sorted(out.items()))
 
     def triangle_count(self) -> int:
-        """Number of triangles of the house's mesh (12 per box, 2 per one-sided ceiling panel)."""
+        """Number of triangles of the house's mesh (12 per box, 2 per one-sided ceiling panel).
+
+        The stairs' steps are counted once: they are part of `structure` (group `stairs_<floor>`).
+        """
         boxes = [b for _, g in self.structure for b in g] + [b for f in self.furniture for b in f.parts]
-        boxes += [b for s in self.stairs for b in s.parts]
         return sum(12 if b.faces == "all" else 2 for b in boxes)
 
     def box_count(self) -> int:
-        """Number of boxes of geometry (structure, furniture and stairs)."""
-        n = sum(len(b) for _, b in self.structure)
-        return n + sum(len(f.parts) for f in self.furniture) + sum(len(s.parts) for s in self.stairs)
+        """Number of boxes of geometry (structure, stairs included, and furniture)."""
+        return sum(len(b) for _, b in self.structure) + sum(len(f.parts) for f in self.furniture)

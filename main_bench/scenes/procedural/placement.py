@@ -15,7 +15,7 @@ from scipy import ndimage
 from . import furniture
 from .layout import overlaps, q
 from .materials import CATEGORY_COLORS, jitter
-from .model import Furniture, Rect, Room
+from .model import RGBA, Furniture, Rect, Room
 from .recipes import RECIPES, Item
 
 #: Clearance kept free round the agent when checking a room stays passable (agent radius 0.18 m + slack).
@@ -24,6 +24,10 @@ CLEAR_RADIUS = 0.22
 REACH = 0.8
 CENTER_CLEARANCE = 0.7
 GRID = 0.05
+#: Spacing (metres) of the candidate positions along walls and over the floor.
+SLOT = 0.1
+#: Candidates that pass the cheap overlap checks and then get the (costlier) passability check, at most.
+MAX_PASSABILITY_CHECKS = 12
 _OPPOSITE = {"+x": "-x", "-x": "+x", "+y": "-y", "-y": "+y"}
 
 
@@ -84,29 +88,24 @@ def _candidates(rng: np.random.Generator, room: Room, item: Item, k: int, count:
     inner = room.inner
     kind, _, ref_cat = item.where.partition(":")
     ref = next((p for p in reversed(placed) if p.piece.category == ref_cat), None) if ref_cat else None
+    # A required piece that goes beside another (the kitchen sink) or free-standing (the dining table) goes
+    # against any wall when it cannot.
+    any_wall = kind in ("beside", "center") and item.p == 1.0 and item.count == (1, 1)
     if ref_cat and ref is None:
-        return []
+        if not any_wall:
+            return []
+        kind, any_wall = "wall", False
     out: list[tuple[Rect, str, Placed | None]] = []
     if kind in ("wall", "mount"):
-        sides = ["+x", "-x", "+y", "-y"]
-        lengths = np.array([_wall_length(inner, s) for s in sides])
-        for _ in range(30):
-            side = sides[int(rng.choice(4, p=lengths / lengths.sum()))]
-            span = _wall_length(inner, side) - w
-            if span < 0:
-                continue
-            rect, facing = _rect_on_wall(inner, side, q(rng.uniform(0, span)), w, d)
-            out.append((rect, facing, None))
+        out.extend(_wall_candidates(inner, w, d))
     elif kind == "center":
         x0, y0, x1, y1 = (inner[0] + CENTER_CLEARANCE, inner[1] + CENTER_CLEARANCE,
                           inner[2] - CENTER_CLEARANCE, inner[3] - CENTER_CLEARANCE)
         along_x = (inner[2] - inner[0]) >= (inner[3] - inner[1])
         sx, sy = (w, d) if along_x else (d, w)
-        for _ in range(30):
-            if x1 - x0 < sx or y1 - y0 < sy:
-                break
-            cx, cy = q(rng.uniform(x0, x1 - sx)), q(rng.uniform(y0, y1 - sy))
-            out.append(((cx, cy, cx + sx, cy + sy), "+y" if along_x else "+x", None))
+        if x1 - x0 >= sx and y1 - y0 >= sy:
+            out.extend(((q(x0 + a), q(y0 + b), q(x0 + a + sx), q(y0 + b + sy)), "+y" if along_x else "+x", None)
+                       for a in _slots(x1 - x0 - sx) for b in _slots(y1 - y0 - sy))
     elif kind == "on":
         f = furniture.Frame(ref.rect, ref.facing, 0.0)
         if w > f.w - 0.04 or d > f.d:
@@ -128,7 +127,27 @@ def _candidates(rng: np.random.Generator, room: Room, item: Item, k: int, count:
             out.append(((min(a[0], b[0]), min(a[1], b[1]), max(a[0], b[0]), max(a[1], b[1])), facing, ref))
     elif kind == "around":
         out.extend(_around(ref, w, d, k, count))
+    if kind in ("wall", "mount", "center"):
+        out = [out[int(i)] for i in rng.permutation(len(out))]
+    if any_wall:
+        walls = _wall_candidates(inner, w, d)
+        out.extend(walls[int(i)] for i in rng.permutation(len(walls)))
     return [(tuple(q(v) for v in r), fc, rf) for r, fc, rf in out]  # type: ignore[misc]
+
+
+def _wall_candidates(inner: Rect, w: float, d: float) -> list[tuple[Rect, str, Placed | None]]:
+    """Every position with the back against a wall, on a SLOT grid along each wall (in a fixed order)."""
+    out: list[tuple[Rect, str, Placed | None]] = []
+    for side in ("+x", "-x", "+y", "-y"):
+        span = _wall_length(inner, side) - w
+        if span >= 0:
+            out.extend((*_rect_on_wall(inner, side, q(u), w, d), None) for u in _slots(span))
+    return out
+
+
+def _slots(span: float) -> np.ndarray:
+    """Offsets 0..span (metres) on the SLOT grid, span itself included."""
+    return np.unique(np.append(np.arange(0.0, span, SLOT), span))
 
 
 def _around(table: Placed, w: float, d: float, k: int, count: int) -> list[tuple[Rect, str, Placed | None]]:
@@ -158,15 +177,31 @@ def _around(table: Placed, w: float, d: float, k: int, count: int) -> list[tuple
 def _place_one(rng: np.random.Generator, room: Room, item: Item, k: int, count: int, placed: list[Placed],
                door_zones: tuple[Rect, ...], keepouts: tuple[Rect, ...], anchors: tuple[tuple[float, float], ...],
                instance_id: int) -> Placed | None:
+    """Place one piece of `item`, or None. A piece that fits nowhere is tried again `item.narrow` wide, then
+    with that narrow side out from the wall."""
     w, d, h = _size(rng, item)
-    kind = item.where.partition(":")[0]
     color = jitter(rng, CATEGORY_COLORS.get(item.category, (160, 160, 160, 255)))
+    ctx = (room, item, k, count, placed, door_zones, keepouts, anchors, instance_id)
+    got = _place_sized(rng, *ctx, w, d, h, color)
+    if got is None and item.narrow is not None:
+        narrow = q(rng.uniform(*item.narrow))
+        got = _place_sized(rng, *ctx, narrow, d, h, color)
+        if got is None:  # long side against the wall (a day bed)
+            got = _place_sized(rng, *ctx, d, narrow, h, color)
+    return got
+
+
+def _place_sized(rng: np.random.Generator, room: Room, item: Item, k: int, count: int, placed: list[Placed],
+                 door_zones: tuple[Rect, ...], keepouts: tuple[Rect, ...], anchors: tuple[tuple[float, float], ...],
+                 instance_id: int, w: float, d: float, h: float, color: RGBA) -> Placed | None:
+    kind = item.where.partition(":")[0]
+    checks = 0
     for rect, facing, ref in _candidates(rng, room, item, k, count, placed, w, d):
         if not _inside(rect, room.inner):
             continue
         if kind == "mount":
             z0 = room.floor_z + item.z
-            if any(overlaps(rect, z) for z in door_zones) or any(
+            if any(overlaps(rect, z) for z in door_zones + keepouts) or any(
                     p.top > item.z - 0.05 and overlaps(rect, p.rect, 0.1 if p.kind == "mount" else 0.0)
                     for p in placed):
                 continue
@@ -182,13 +217,18 @@ def _place_one(rng: np.random.Generator, room: Room, item: Item, k: int, count: 
             others = [p for p in placed if p.on_floor and (ref is None or p is not ref)]
             if any(overlaps(rect, p.rect, gap) for p in others):
                 continue
+        on_floor = kind not in ("mount", "on")
+        if on_floor:
+            if checks >= MAX_PASSABILITY_CHECKS:
+                return None
+            checks += 1
+            if not _passable(room.inner, [*(p.rect for p in placed if p.on_floor), rect], anchors):
+                continue
         parts = furniture.build(item.category, rect, facing, z0, h, color)
         lo, hi = furniture.bounds(parts)
         piece = Furniture(instance_id, item.category, f"{item.category}_{instance_id}", room.name, lo, hi, parts)
         top = h + (ref.top if kind == "on" and ref is not None else 0.0) + (item.z if kind == "mount" else 0.0)
-        cand = Placed(piece, rect, facing, kind not in ("mount", "on"), top, kind)
-        if kind in ("mount", "on") or _passable(room.inner, [*placed, cand], anchors):
-            return cand
+        return Placed(piece, rect, facing, on_floor, top, kind)
     return None
 
 
@@ -196,8 +236,9 @@ def _inside(r: Rect, inner: Rect) -> bool:
     return r[0] >= inner[0] - 1e-6 and r[1] >= inner[1] - 1e-6 and r[2] <= inner[2] + 1e-6 and r[3] <= inner[3] + 1e-6
 
 
-def _passable(inner: Rect, placed: list[Placed], anchors: tuple[tuple[float, float], ...]) -> bool:
-    """Free floor (eroded by CLEAR_RADIUS) joins all anchors, and every piece has free floor within REACH."""
+def _passable(inner: Rect, rects: list[Rect], anchors: tuple[tuple[float, float], ...]) -> bool:
+    """Free floor (eroded by CLEAR_RADIUS) joins all anchors, and every floor piece (`rects`) has free floor
+    within REACH."""
     x0, y0, x1, y1 = inner
     nx, ny = max(1, round((x1 - x0) / GRID)), max(1, round((y1 - y0) / GRID))
     free = np.zeros((nx + 2, ny + 2), dtype=bool)
@@ -210,9 +251,8 @@ def _passable(inner: Rect, placed: list[Placed], anchors: tuple[tuple[float, flo
         j0, j1 = np.searchsorted(ys, r[1] - grow), np.searchsorted(ys, r[3] + grow)
         return slice(i0 + 1, i1 + 1), slice(j0 + 1, j1 + 1)
 
-    for p in placed:
-        if p.on_floor:
-            free[cells(p.rect)] = False
+    for r in rects:
+        free[cells(r)] = False
     ok = ndimage.distance_transform_edt(free) * GRID > CLEAR_RADIUS
     labels, n = ndimage.label(ok)
     if n == 0:
@@ -227,4 +267,4 @@ def _passable(inner: Rect, placed: list[Placed], anchors: tuple[tuple[float, flo
     if len(wanted) != 1 or 0 in wanted:
         return False
     main = wanted.pop()
-    return all(np.any(labels[cells(p.rect, REACH)] == main) for p in placed if p.on_floor)
+    return all(np.any(labels[cells(r, REACH)] == main) for r in rects)

@@ -15,7 +15,8 @@ class Item:
     "wall" (back to a wall), "center" (free-standing, clearance all round), "mount" (on a wall at height
     `z`), "on:<cat>" (on top of the last <cat>), "front:<cat>" (in front of it, `gap` away), "beside:<cat>"
     (next to it along the same wall), "around:<cat>" (chairs round a table). `count` instances are tried,
-    the whole item only with probability `p`.
+    the whole item only with probability `p`. `narrow`: a width range tried when the drawn piece fits nowhere
+    (a single bed for a double one).
     """
 
     category: str
@@ -27,10 +28,11 @@ class Item:
     count: tuple[int, int] = (1, 1)
     z: float = 0.0
     gap: float = 0.05
+    narrow: Range | None = None
 
 
-_PLANT = Item("plant", (0.35, 0.5), (0.35, 0.5), (0.7, 1.4), p=0.7, count=(1, 2))
-_PICTURE = Item("picture", (0.5, 1.0), (0.03, 0.03), (0.4, 0.7), "mount", p=0.8, count=(1, 2), z=1.35)
+_PLANT = Item("plant", (0.35, 0.5), (0.35, 0.5), (0.7, 1.4), p=0.8, count=(1, 3))
+_PICTURE = Item("picture", (0.5, 1.0), (0.03, 0.03), (0.4, 0.7), "mount", p=0.9, count=(1, 3), z=1.35)
 _LAMP = Item("lamp", (0.3, 0.4), (0.3, 0.4), (1.45, 1.7), p=0.5)
 
 RECIPES: dict[str, tuple[Item, ...]] = {
@@ -39,9 +41,9 @@ RECIPES: dict[str, tuple[Item, ...]] = {
         Item("coffee_table", (0.9, 1.2), (0.5, 0.65), (0.4, 0.48), "front:sofa", gap=0.45),
         Item("cabinet", (1.3, 1.8), (0.4, 0.5), (0.45, 0.55)),
         Item("tv", (0.9, 1.2), (0.2, 0.2), (0.55, 0.75), "on:cabinet"),
-        Item("armchair", (0.8, 0.9), (0.8, 0.9), (0.85, 0.95), p=0.7),
+        Item("armchair", (0.8, 0.9), (0.8, 0.9), (0.85, 0.95), p=0.8, count=(1, 2)),
         Item("bookshelf", (0.8, 1.2), (0.3, 0.38), (1.8, 2.0), p=0.6),
-        _PLANT, _LAMP, _PICTURE,
+        _PLANT, _LAMP, Item("picture", (0.5, 1.0), (0.03, 0.03), (0.4, 0.7), "mount", count=(2, 4), z=1.35),
     ),
     "kitchen": (
         Item("refrigerator", (0.7, 0.8), (0.65, 0.72), (1.75, 1.9)),
@@ -50,7 +52,7 @@ RECIPES: dict[str, tuple[Item, ...]] = {
         Item("sink", (0.6, 0.8), (0.6, 0.62), (0.9, 0.92), "beside:counter"),
         Item("stove", (0.6, 0.75), (0.6, 0.62), (0.9, 0.92)),
         Item("dishwasher", (0.6, 0.6), (0.6, 0.62), (0.85, 0.87), p=0.5),
-        Item("table", (0.9, 1.3), (0.7, 0.85), (0.74, 0.77), "center", p=0.6),
+        Item("table", (0.9, 1.3), (0.7, 0.85), (0.74, 0.77), "center", p=0.85),
         Item("chair", (0.42, 0.48), (0.42, 0.48), (0.85, 0.95), "around:table", count=(2, 4)),
         Item("plant", (0.3, 0.4), (0.3, 0.4), (0.5, 0.9), p=0.4),
     ),
@@ -61,8 +63,8 @@ RECIPES: dict[str, tuple[Item, ...]] = {
         _PLANT, _PICTURE, Item("lamp", (0.3, 0.4), (0.3, 0.4), (1.45, 1.7), p=0.3),
     ),
     "bedroom": (
-        Item("bed", (1.4, 1.8), (1.95, 2.1), (0.45, 0.55)),
-        Item("nightstand", (0.4, 0.5), (0.38, 0.45), (0.5, 0.6), "beside:bed", count=(1, 2), gap=0.05),
+        Item("bed", (1.4, 1.8), (1.95, 2.1), (0.45, 0.55), narrow=(0.9, 1.0)),
+        Item("nightstand", (0.4, 0.5), (0.38, 0.45), (0.5, 0.6), "beside:bed", count=(2, 2), gap=0.05),
         Item("wardrobe", (1.0, 1.8), (0.55, 0.65), (1.9, 2.2)),
         Item("dresser", (0.8, 1.2), (0.45, 0.5), (0.75, 0.9), p=0.5),
         Item("desk", (1.0, 1.3), (0.55, 0.65), (0.74, 0.76), p=0.3),
@@ -74,7 +76,7 @@ RECIPES: dict[str, tuple[Item, ...]] = {
         Item("sink", (0.5, 0.7), (0.4, 0.5), (0.85, 0.9)),
         Item("bathtub", (1.6, 1.75), (0.7, 0.8), (0.55, 0.6), p=0.6),
         Item("shower", (0.8, 0.9), (0.8, 0.9), (2.0, 2.1), p=0.5),
-        Item("towel", (0.4, 0.6), (0.05, 0.05), (0.6, 0.8), "mount", z=0.9),
+        Item("towel", (0.4, 0.6), (0.05, 0.05), (0.6, 0.8), "mount", count=(1, 2), z=0.9),
         Item("washing_machine", (0.6, 0.6), (0.6, 0.62), (0.85, 0.87), p=0.3),
         Item("plant", (0.25, 0.35), (0.25, 0.35), (0.4, 0.7), p=0.2),
     ),

@@ -1,10 +1,17 @@
 """The `gl` backend: OpenGL 3.3 through EGL with no display (moderngl), on a GPU or on Mesa's llvmpipe.
 
-All agents' views go into one framebuffer in one pass: view i is the tile [i*W, (i+1)*W) x [0, H); one
-readback per attachment serves every agent. The static scene is one vertex buffer (unindexed triangles with
-per-corner colours, UVs and a texture-array layer); agents are one shared cylinder mesh drawn with a per-agent
-offset and tint. Linear z-depth is written by the fragment shader into a float attachment (depth/max_depth),
-so no depth-buffer conversion is needed and precision does not depend on the near/far ratio.
+One render pass serves every agent: the views are stacked in one framebuffer (view k of a batch is the tile
+rows [k*H, (k+1)*H), so the readback is already (N, H, W, C) and needs no transpose), and one readback per
+attachment returns all of them, straight into the output arrays. The framebuffer, the per-view uniform
+buffer and the agents' instance buffer are made once and reused; a step allocates only its output arrays.
+
+The scene is baked once: unindexed triangles deduplicated into an indexed vertex buffer, ordered by grid cell
+for culling (`culling.CellCuller`), with a fixed two-sided directional light multiplied into the vertex colours,
+so the fragment shader of untextured surfaces only copies a colour and writes depth. Textured surfaces (if
+any) get their own buffer and program, which samples a texture array. Agents are one cylinder mesh drawn
+instanced (offset and tint per instance); the viewing agent's instance is dropped in the vertex shader.
+Linear z-depth goes to a float attachment (depth / max_depth), so no depth-buffer conversion is needed and
+precision does not depend on the near/far ratio.
 """
 
 from __future__ import annotations
@@ -14,88 +21,126 @@ import numpy as np
 from ...scenes.loader import Scene
 from ..settings import CameraSettings
 from .camera import NEAR_M, far_plane, focal_scales, view_axes
-from .materials import TEXTURE_SIZE, agent_colors, scene_surfaces
+from .culling import CellCuller
+from .materials import TEXTURE_SIZE, agent_colors, face_normals, scene_surfaces
+
+#: Direction of the baked light (canonical frame); surfaces facing it or away from it are brightest.
+LIGHT_DIR = np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84])
+#: Baked shading: AMBIENT + (1 - AMBIENT) * |normal . LIGHT_DIR|.
+AMBIENT = 0.5
 
 
 class GLUnavailable(RuntimeError):
     """No headless OpenGL context could be created or it does not render."""
 
 
+# Shader sources are shared by three programs: MODE 0 untextured scene, 1 textured scene, 2 agents.
 _VERTEX = """
-#version 330
-uniform vec3 u_eye;
-uniform vec3 u_fwd;
-uniform vec3 u_right;
+layout(std140) uniform View { vec4 u_eye; vec4 u_fwd; vec4 u_right; ivec4 u_self; };
 uniform vec2 u_focal;
 uniform vec2 u_clip;
-uniform vec3 u_offset;
-uniform vec3 u_scale;
 in vec3 in_pos;
-in vec4 in_color;
+out float v_depth;
+out vec3 v_color;
+#if MODE == 1
 in vec2 in_uv;
 in float in_layer;
-out vec3 v_view;
-out vec4 v_color;
 out vec2 v_uv;
 flat out float v_layer;
+#endif
+#if MODE == 2
+uniform vec3 u_scale;
+in float in_shade;
+in vec3 in_offset;
+in vec3 in_tint;
+#else
+in vec4 in_color;
+#endif
 void main() {
-    vec3 rel = in_pos * u_scale + u_offset - u_eye;
-    float zc = dot(rel, u_fwd);
-    float xc = dot(rel, u_right);
-    v_view = vec3(xc, rel.z, zc);
-    v_color = in_color;
+#if MODE == 2
+    vec3 world = in_pos * u_scale + in_offset;
+    v_color = in_tint * in_shade;
+#else
+    vec3 world = in_pos;
+    v_color = in_color.rgb;
+#endif
+#if MODE == 1
     v_uv = in_uv;
     v_layer = in_layer;
-    // Image row 0 at the top of the framebuffer: y is flipped so the readback needs no flip.
+#endif
+    vec3 rel = world - u_eye.xyz;
+    float zc = dot(rel, u_fwd.xyz);
+    float xc = dot(rel, u_right.xyz);
+    v_depth = zc;
+    // Image row 0 at the top of its tile: y is flipped so the readback needs no flip.
     gl_Position = vec4(xc * u_focal.x, -rel.z * u_focal.y, u_clip.x * zc + u_clip.y, zc);
+#if MODE == 2
+    if (gl_InstanceID == u_self.x) {
+        gl_Position = vec4(0.0, 0.0, -2.0, 1.0);  // an agent never sees its own body: clipped away
+    }
+#endif
 }
 """
 
 _FRAGMENT = """
-#version 330
-uniform sampler2DArray u_tex;
-uniform vec3 u_tint;
 uniform float u_inv_max_depth;
-in vec3 v_view;
-in vec4 v_color;
+in float v_depth;
+in vec3 v_color;
+#if MODE == 1
+uniform sampler2DArray u_tex;
 in vec2 v_uv;
 flat in float v_layer;
+#endif
 layout(location = 0) out vec4 f_color;
 layout(location = 1) out float f_depth;
 void main() {
-    vec4 c = v_color * vec4(u_tint, 1.0);
-    if (v_layer >= 0.0) {
-        c *= texture(u_tex, vec3(v_uv.x, 1.0 - v_uv.y, v_layer));
-    }
-    vec3 n = normalize(cross(dFdx(v_view), dFdy(v_view)));
-    float shade = 0.45 + 0.55 * abs(dot(n, normalize(v_view)));
-    f_color = vec4(c.rgb * shade, 1.0);
-    f_depth = min(v_view.z * u_inv_max_depth, 1.0);
+#if MODE == 1
+    f_color = vec4(v_color * texture(u_tex, vec3(v_uv.x, 1.0 - v_uv.y, v_layer)).rgb, 1.0);
+#else
+    f_color = vec4(v_color, 1.0);
+#endif
+    f_depth = min(v_depth * u_inv_max_depth, 1.0);
 }
 """
 
 
+def _source(body: str, mode: int) -> str:
+    return f"#version 330\n#define MODE {mode}\n{body}"
+
+
+def baked_shade(normals: np.ndarray) -> np.ndarray:
+    """Light factor in [AMBIENT, 1] for unit normals (..., 3): two-sided, so a face's winding does not matter."""
+    return AMBIENT + (1.0 - AMBIENT) * np.abs(normals @ LIGHT_DIR)
+
+
 def _cylinder(segments: int = 24) -> np.ndarray:
-    """Unit upright cylinder (radius 1, z from 0 to 1) as unindexed triangles (T*3, 3)."""
+    """Unit upright cylinder (radius 1, z from 0 to 1) with smooth side normals: (T*3,) records of position
+    and baked shade (float32 x 4 each)."""
     a = np.linspace(0.0, 2.0 * np.pi, segments + 1)
     ring = np.stack([np.cos(a), np.sin(a)], axis=1)
-    tris = []
+    rows = []
     for k in range(segments):
         (x0, y0), (x1, y1) = ring[k], ring[k + 1]
-        tris += [(x0, y0, 0), (x1, y1, 0), (x1, y1, 1), (x0, y0, 0), (x1, y1, 1), (x0, y0, 1)]
-        tris += [(0, 0, 1), (x0, y0, 1), (x1, y1, 1), (0, 0, 0), (x1, y1, 0), (x0, y0, 0)]
-    return np.asarray(tris, dtype=np.float32)
+        s0, s1 = baked_shade(np.array([x0, y0, 0.0])), baked_shade(np.array([x1, y1, 0.0]))
+        rows += [(x0, y0, 0, s0), (x1, y1, 0, s1), (x1, y1, 1, s1), (x0, y0, 0, s0), (x1, y1, 1, s1), (x0, y0, 1, s0)]
+        cap = baked_shade(np.array([0.0, 0.0, 1.0]))
+        rows += [(0, 0, 1, cap), (x0, y0, 1, cap), (x1, y1, 1, cap), (0, 0, 0, cap), (x1, y1, 0, cap), (x0, y0, 0, cap)]
+    return np.asarray(rows, dtype=np.float32)
 
 
-_RECORD = np.dtype([("pos", "<f4", 3), ("color", "u1", 4), ("uv", "<f4", 2), ("layer", "<f4")])
+def _plain_records(corners: np.ndarray, colors: np.ndarray) -> np.ndarray:
+    rec = np.empty(corners.shape[0] * 3, dtype=[("pos", "<f4", 3), ("color", "u1", 4)])
+    rec["pos"] = corners.reshape(-1, 3)
+    rec["color"] = colors.reshape(-1, 4)
+    return rec
 
 
-def _vertex_records(corners: np.ndarray, colors: np.ndarray, uvs: np.ndarray, layer: np.ndarray) -> np.ndarray:
-    n = corners.shape[0] * 3
-    rec = np.empty(n, dtype=_RECORD)
-    rec["pos"] = corners.reshape(n, 3)
-    rec["color"] = colors.reshape(n, 4)
-    rec["uv"] = uvs.reshape(n, 2)
+def _textured_records(corners: np.ndarray, colors: np.ndarray, uvs: np.ndarray, layer: np.ndarray) -> np.ndarray:
+    rec = np.empty(corners.shape[0] * 3, dtype=[("pos", "<f4", 3), ("color", "u1", 4), ("uv", "<f4", 2),
+                                                 ("layer", "<f4")])
+    rec["pos"] = corners.reshape(-1, 3)
+    rec["color"] = colors.reshape(-1, 4)
+    rec["uv"] = uvs.reshape(-1, 2)
     rec["layer"] = np.repeat(layer.astype(np.float32), 3)
     return rec
 
@@ -114,51 +159,22 @@ def _indexed(rec: np.ndarray) -> tuple[bytes, bytes]:
     return verts.tobytes(), rank[inverse.ravel()].astype(np.uint32).tobytes()
 
 
-class _CellCuller:
-    """Orders faces by 2D grid cell and picks, per view, the cells that can be seen (the hfov wedge within
-    max_depth, tested on each cell's bounding circle), as merged (first, count) vertex ranges."""
+class _Batch:
+    """One culled, indexed vertex buffer of scene faces with its program."""
 
-    def __init__(self, corners: np.ndarray, camera: CameraSettings, cell_m: float = 1.0, max_cells: int = 64):
-        xy = corners[:, :, :2].astype(np.float64)
-        lo = xy.reshape(-1, 2).min(axis=0)
-        extent = xy.reshape(-1, 2).max(axis=0) - lo
-        cell = max(cell_m, float(extent.max()) / max_cells)
-        dims = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
-        ij = np.minimum(((xy.mean(axis=1) - lo) / cell).astype(np.int64), dims - 1)
-        cell_of = ij[:, 0] * dims[1] + ij[:, 1]
-        self.order = np.argsort(cell_of, kind="stable")
-        cells, starts, counts = np.unique(cell_of[self.order], return_index=True, return_counts=True)
-        fmin = xy.min(axis=1)[self.order]
-        fmax = xy.max(axis=1)[self.order]
-        bmin = np.minimum.reduceat(fmin, starts)
-        bmax = np.maximum.reduceat(fmax, starts)
-        self.centres = (bmin + bmax) / 2.0
-        self.radii = np.linalg.norm(bmax - bmin, axis=1) / 2.0
-        self.first = starts * 3
-        self.count = counts * 3
-        self.reach = camera.max_depth * 1.05 + 0.1
-        half = camera.hfov / 2.0
-        self.cos_h, self.sin_h = float(np.cos(half)), float(np.sin(half))
+    def __init__(self, ctx, prog, corners: np.ndarray, records, fmt: tuple[str, ...], camera: CameraSettings):
+        self.culler = CellCuller(corners, camera)
+        verts, index = _indexed(records(self.culler.order))
+        self.vbo, self.ibo = ctx.buffer(verts), ctx.buffer(index)
+        self.vao = ctx.vertex_array(prog, [(self.vbo, *fmt)], index_buffer=self.ibo, index_element_size=4)
 
-    def ranges(self, eye: np.ndarray, fwd: np.ndarray, right: np.ndarray) -> np.ndarray:
-        """(K, 4) uint32 indirect draw records (count, 1, first, 0) for the cells visible from this view."""
-        d = self.centres - eye[:2]
-        along = d @ fwd[:2]
-        lateral = np.abs(d @ right[:2])
-        rad = self.radii
-        vis = (along >= -rad) & (along - rad <= self.reach) & (lateral * self.cos_h - along * self.sin_h <= rad)
-        idx = np.nonzero(vis)[0]
-        if len(idx) == 0:
-            return np.zeros((0, 4), dtype=np.uint32)
-        # Merge runs of consecutive cells into one draw each.
-        breaks = np.nonzero(np.diff(idx) != 1)[0] + 1
-        run_start = np.concatenate([[0], breaks])
-        run_end = np.concatenate([breaks, [len(idx)]]) - 1
-        first = self.first[idx[run_start]]
-        count = self.first[idx[run_end]] + self.count[idx[run_end]] - first
-        out = np.zeros((len(first), 4), dtype=np.uint32)
-        out[:, 0], out[:, 1], out[:, 2] = count, 1, first
-        return out
+    def draw(self, eye: np.ndarray, fwd: np.ndarray, right: np.ndarray) -> None:
+        for first, count in self.culler.ranges(eye, fwd, right):
+            self.vao.render(vertices=count, first=first)
+
+    def release(self) -> None:
+        for obj in (self.vao, self.vbo, self.ibo):
+            obj.release()
 
 
 class GLRenderer:
@@ -176,93 +192,131 @@ class GLRenderer:
             raise GLUnavailable(f"{type(exc).__name__}: {exc}") from None
         self.reason = reason
         self.camera = camera
-        self.device = str(self._ctx.info.get("GL_RENDERER", "unknown"))
-        self._agent_shape = (agent_radius, agent_radius, agent_height)
-        ctx = self._ctx
+        info = self._ctx.info
+        self.device = str(info.get("GL_RENDERER", "unknown"))
+        align = int(info.get("GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT", 256) or 256)
+        self._stride = -(-64 // align) * align  # bytes per view record in the uniform buffer
+        max_rows = min(int(info.get("GL_MAX_RENDERBUFFER_SIZE", 4096)), int(info.get("GL_MAX_VIEWPORT_DIMS",
+                                                                                      (4096, 4096))[1]))
+        self._views_per_pass = max(1, max_rows // camera.height)
+        self._batches: list[_Batch] = []
+        self._fbo = self._rbs = self._ubo = self._inst = self._agent_vao = None
+        self._fbo_views = self._capacity = 0
         try:
-            self._prog = ctx.program(vertex_shader=_VERTEX, fragment_shader=_FRAGMENT)
-            surf = scene_surfaces(scene)
-            self._culler = _CellCuller(surf.corners, camera)
-            o = self._culler.order
-            verts, index = _indexed(_vertex_records(surf.corners[o], surf.colors[o], surf.uvs[o], surf.layer[o]))
-            self._scene_vbo = ctx.buffer(verts)
-            self._scene_ibo = ctx.buffer(index)
-            fmt = ("3f 4f1 2f 1f", "in_pos", "in_color", "in_uv", "in_layer")
-            self._scene_vao = ctx.vertex_array(self._prog, [(self._scene_vbo, *fmt)], index_buffer=self._scene_ibo,
-                                               index_element_size=4)
-            cyl = _cylinder().reshape(-1, 3, 3)
-            white = np.full((len(cyl), 3, 4), 255, dtype=np.uint8)
-            self._cyl_vbo = ctx.buffer(_vertex_records(cyl, white, np.zeros((len(cyl), 3, 2), np.float32),
-                                                       np.full(len(cyl), -1, np.int32)).tobytes())
-            self._cyl_vao = ctx.vertex_array(self._prog, [(self._cyl_vbo, *fmt)])
-            layers = surf.textures or (np.full((TEXTURE_SIZE, TEXTURE_SIZE, 4), 255, np.uint8),)
-            self._tex = ctx.texture_array((TEXTURE_SIZE, TEXTURE_SIZE, len(layers)), 4,
-                                          np.stack(layers).tobytes())
-            self._tex.build_mipmaps()
-            self._tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
-            self._tex.use(0)
-            prog = self._prog
-            prog["u_tex"].value = 0
-            far = far_plane(camera)
-            prog["u_clip"].value = ((far + NEAR_M) / (far - NEAR_M), -2.0 * far * NEAR_M / (far - NEAR_M))
-            prog["u_focal"].value = focal_scales(camera)
-            prog["u_inv_max_depth"].value = 1.0 / camera.max_depth
-            self._u = {k: prog[k] for k in ("u_eye", "u_fwd", "u_right", "u_offset", "u_scale", "u_tint")}
-        except GLUnavailable:
-            raise
+            self._setup(scene, camera, agent_radius, agent_height)
         except Exception as exc:
             self._ctx.release()
             raise GLUnavailable(f"context created but setup failed ({type(exc).__name__}: {exc})") from None
-        ctx.enable(moderngl.DEPTH_TEST)
-        self._fbo = None
-        self._fbo_agents = 0
 
-    def _framebuffer(self, n: int):
-        if self._fbo is None or self._fbo_agents != n:
+    def _setup(self, scene: Scene, camera: CameraSettings, agent_radius: float, agent_height: float) -> None:
+        import moderngl
+
+        ctx = self._ctx
+        progs = [ctx.program(vertex_shader=_source(_VERTEX, m), fragment_shader=_source(_FRAGMENT, m))
+                 for m in range(3)]
+        far = far_plane(camera)
+        for prog in progs:
+            prog["View"].binding = 0
+            prog["u_clip"].value = ((far + NEAR_M) / (far - NEAR_M), -2.0 * far * NEAR_M / (far - NEAR_M))
+            prog["u_focal"].value = focal_scales(camera)
+            prog["u_inv_max_depth"].value = 1.0 / camera.max_depth
+        self._progs = progs
+        surf = scene_surfaces(scene)
+        shade = baked_shade(face_normals(surf.corners))
+        lit = surf.colors.astype(np.float32)
+        lit[:, :, :3] *= shade[:, None, None]
+        lit = np.clip(np.rint(lit), 0, 255).astype(np.uint8)
+        plain, textured = np.nonzero(surf.layer < 0)[0], np.nonzero(surf.layer >= 0)[0]
+        if len(plain):
+            c = surf.corners[plain]
+            self._batches.append(_Batch(ctx, progs[0], c, lambda o: _plain_records(c[o], lit[plain][o]),
+                                        ("3f 4f1", "in_pos", "in_color"), camera))
+        if len(textured):
+            c = surf.corners[textured]
+            layers = np.stack(surf.textures)
+            self._tex = ctx.texture_array((TEXTURE_SIZE, TEXTURE_SIZE, len(layers)), 4, layers.tobytes())
+            self._tex.build_mipmaps()
+            self._tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+            self._tex.use(0)
+            progs[1]["u_tex"].value = 0
+            t = textured
+            self._batches.append(_Batch(
+                ctx, progs[1], c, lambda o: _textured_records(c[o], lit[t][o], surf.uvs[t][o], surf.layer[t][o]),
+                ("3f 4f1 2f 1f", "in_pos", "in_color", "in_uv", "in_layer"), camera))
+        progs[2]["u_scale"].value = (agent_radius, agent_radius, agent_height)
+        self._cyl_vbo = ctx.buffer(_cylinder().tobytes())
+        self._cyl_vertices = len(_cylinder())
+        ctx.enable(moderngl.DEPTH_TEST)
+
+    # ---------------------------------------------------------------- per-team buffers
+    def _ensure_capacity(self, n: int) -> None:
+        """Uniform buffer (one record per view) and instance buffer (one per agent) for at least n agents."""
+        if n <= self._capacity:
+            return
+        ctx = self._ctx
+        for obj in (self._agent_vao, self._inst, self._ubo):
+            if obj is not None:
+                obj.release()
+        self._capacity = max(n, 2 * self._capacity)
+        self._ubo = ctx.buffer(reserve=self._stride * self._capacity, dynamic=True)
+        self._inst = ctx.buffer(reserve=24 * self._capacity, dynamic=True)
+        self._agent_vao = ctx.vertex_array(self._progs[2], [(self._cyl_vbo, "3f 1f", "in_pos", "in_shade"),
+                                                            (self._inst, "3f 3f/i", "in_offset", "in_tint")])
+        self._views = np.zeros((self._capacity, self._stride // 4), dtype=np.float32)
+        self._views.view(np.int32)[:, 12] = np.arange(self._capacity)  # u_self: the viewing agent's index
+        self._agents = np.zeros((self._capacity, 6), dtype=np.float32)
+        self._agents[:, 3:] = agent_colors(self._capacity)
+
+    def _framebuffer(self, views: int):
+        """The shared framebuffer, at least `views` tiles high (made once, grown when needed)."""
+        if self._fbo is None or self._fbo_views < views:
             if self._fbo is not None:
                 self._fbo.release()
                 for rb in self._rbs:
                     rb.release()
-            size = (self.camera.width * n, self.camera.height)
+            size = (self.camera.width, self.camera.height * views)
             self._rbs = (self._ctx.renderbuffer(size, 4), self._ctx.renderbuffer(size, 1, dtype="f4"),
                          self._ctx.depth_renderbuffer(size))
             self._fbo = self._ctx.framebuffer(color_attachments=self._rbs[:2], depth_attachment=self._rbs[2])
-            self._fbo_agents = n
+            self._fbo_views = views
         return self._fbo
 
+    # ---------------------------------------------------------------- rendering
     def render(self, feet: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Render all agents' views: rgb (N,H,W,3) uint8, depth (N,H,W,1) float32 metres (see `Renderer`)."""
         feet = np.asarray(feet, dtype=np.float64).reshape(-1, 3)
         n = len(feet)
         w, h = self.camera.width, self.camera.height
+        rgb = np.empty((n, h, w, 3), dtype=np.uint8)
+        depth = np.empty((n, h, w, 1), dtype=np.float32)
+        if n == 0:
+            return rgb, depth
         eyes, fwd, right, _ = view_axes(feet, yaws, self.camera)
-        colors = agent_colors(n)
-        with self._ctx:
-            fbo = self._framebuffer(n)
+        per_pass = min(n, self._views_per_pass)
+        with self._ctx as ctx:
+            self._ensure_capacity(n)
+            views, agents = self._views, self._agents
+            views[:n, 0:3], views[:n, 4:7], views[:n, 8:11] = eyes, fwd, right
+            agents[:n, :3] = feet
+            self._ubo.write(views[:n])
+            self._inst.write(agents[:n])
+            fbo = self._framebuffer(per_pass)
             fbo.use()
-            fbo.clear(1.0, 1.0, 1.0, 1.0, depth=1.0)
-            u = self._u
-            identity = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0))
-            for i in range(n):
-                self._ctx.viewport = (i * w, 0, w, h)
-                u["u_eye"].value = tuple(eyes[i])
-                u["u_fwd"].value = tuple(fwd[i])
-                u["u_right"].value = tuple(right[i])
-                u["u_offset"].value, u["u_scale"].value, u["u_tint"].value = identity
-                draws = self._culler.ranges(eyes[i], fwd[i], right[i])
-                for cnt, _, first, _ in draws.tolist():
-                    self._scene_vao.render(vertices=cnt, first=first)
-                if n > 1:
-                    u["u_scale"].value = self._agent_shape
-                    for j in range(n):
-                        if j != i:
-                            u["u_offset"].value = tuple(feet[j])
-                            u["u_tint"].value = tuple(colors[j])
-                            self._cyl_vao.render()
-            rgb = np.frombuffer(fbo.read(components=3, attachment=0), dtype=np.uint8).reshape(h, n, w, 3)
-            depth = np.frombuffer(fbo.read(components=1, attachment=1, dtype="f4"), dtype=np.float32)
-            depth = depth.reshape(h, n, w, 1) * np.float32(self.camera.max_depth)
-        return np.ascontiguousarray(rgb.transpose(1, 0, 2, 3)), np.ascontiguousarray(depth.transpose(1, 0, 2, 3))
+            for start in range(0, n, per_pass):
+                stop = min(n, start + per_pass)
+                area = (0, 0, w, h * (stop - start))
+                fbo.clear(1.0, 1.0, 1.0, 1.0, depth=1.0, viewport=area)
+                for k, i in enumerate(range(start, stop)):
+                    ctx.viewport = (0, k * h, w, h)
+                    self._ubo.bind_to_uniform_block(0, offset=i * self._stride, size=self._stride)
+                    for batch in self._batches:
+                        batch.draw(eyes[i], fwd[i], right[i])
+                    if n > 1:
+                        self._agent_vao.render(vertices=self._cyl_vertices, instances=n)
+                fbo.read_into(rgb[start:stop], viewport=area, components=3, attachment=0)
+                fbo.read_into(depth[start:stop], viewport=area, components=1, attachment=1, dtype="f4")
+        depth *= np.float32(self.camera.max_depth)
+        return rgb, depth
 
     def self_test(self) -> None:
         """Render one view and check its output; raises GLUnavailable when the context does not render."""

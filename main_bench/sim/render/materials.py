@@ -123,6 +123,13 @@ def scene_surfaces(scene: Scene) -> Surfaces:
     )
 
 
+def face_normals(corners: np.ndarray) -> np.ndarray:
+    """(F, 3) unit normals (float64) of triangles given as corners (F, 3, 3); degenerate faces get (0, 0, 0)."""
+    c = np.asarray(corners, dtype=np.float64)
+    normals = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+    return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+
+
 def agent_colors(n: int) -> np.ndarray:
     """(n, 3) float RGB in [0, 1]: a distinct, saturated colour per agent index (fixed, not random)."""
     hues = (np.arange(n) * 0.618033988749895 + 0.05) % 1.0

@@ -15,7 +15,7 @@ import pybullet as pb
 from ...scenes.loader import Scene
 from ..settings import CameraSettings
 from .camera import NEAR_M, far_plane, view_axes
-from .materials import agent_colors, scene_surfaces
+from .materials import agent_colors, face_normals, scene_surfaces
 
 #: Most colour groups (visual shapes) made from a scene; colours are quantised more coarsely until they fit.
 MAX_COLOR_GROUPS = 256
@@ -56,8 +56,7 @@ class TinyRenderer:
         surf = scene_surfaces(scene)
         labels, palette = _color_groups(surf.face_colors())
         corners = surf.corners.astype(np.float64)
-        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+        normals = face_normals(corners)
         chunk = MAX_MESH_VERTICES // 3
         for g, rgba in enumerate(palette):
             group = np.nonzero(labels == g)[0]

@@ -1,0 +1,117 @@
+"""What episodes of a data set need loaded, kept between episodes: scenes, navmeshes, simulators, target fields.
+
+Shared by the evaluator's workers and the PettingZoo environment. Nothing kept here changes results: every
+episode starts from the data set's start state, and a field or simulator rebuilt on a cache miss is the same.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..episodes.schema import Episode
+from .episode_loop import target_key
+
+#: Target distance fields kept (they are rebuilt on a miss; results do not depend on this).
+FIELD_CACHE = 64
+#: Extra clearance (metres) of the navmesh the privileged baselines plan on, so their paths keep off walls.
+PLAN_MARGIN = 0.1
+
+
+class EpisodeResources:
+    """Loads and caches, for one data set: scenes with their navmeshes, one `Simulator` per (scene, team size)
+    (only the current scene's are kept), and each target's distance field. `close()` when done."""
+
+    def __init__(self, manifest: Any, sim_settings: Any, cache_dir: Path | None = None, seed: int = 0) -> None:
+        self.manifest = manifest
+        self.sim_settings = sim_settings
+        self.cache_dir = None if cache_dir is None else Path(cache_dir)
+        self.seed = int(seed)
+        self._scenes: dict[str, tuple[Any, Any]] = {}
+        self._plan_navmeshes: dict[str, Any] = {}
+        self._sims: dict[tuple[str, int], Any] = {}
+        self._fields: OrderedDict[tuple, Any] = OrderedDict()
+
+    def scene(self, scene_id: str) -> tuple[Any, Any]:
+        """(Scene, NavMesh) of `scene_id`, built with the data set's navmesh settings (cached on disk)."""
+        if scene_id not in self._scenes:
+            from ..episodes.dataset import resolve_scene
+            from ..navmesh import NavMesh
+            from ..scenes.loader import load_scene
+
+            entry = self.manifest.scenes.get(scene_id)
+            path = resolve_scene(self.manifest, scene_id, self.cache_dir)
+            scene = load_scene(path, up=getattr(entry, "up", "auto") or "auto")
+            navmesh = NavMesh.build_cached(scene, self.manifest.navmesh(), self._navmesh_cache())
+            self._scenes[scene_id] = (scene, navmesh)
+        return self._scenes[scene_id]
+
+    def _navmesh_cache(self) -> Path:
+        if self.cache_dir is not None:
+            return self.cache_dir / "navmesh"
+        from ..scenes.builtin import default_cache_dir
+
+        return Path(default_cache_dir()) / "navmesh"
+
+    def simulator(self, scene_id: str, agents: int) -> Any:
+        """The `Simulator` of `agents` agents in `scene_id`; simulators of other scenes are closed."""
+        key = (scene_id, agents)
+        if key not in self._sims:
+            from ..sim import Simulator
+
+            for old in [k for k in self._sims if k[0] != scene_id]:
+                self._sims.pop(old).close()
+            scene, navmesh = self.scene(scene_id)
+            self._sims[key] = Simulator(scene, navmesh, self.sim_settings, seed=self.seed)
+        return self._sims[key]
+
+    def _plan_navmesh(self, scene_id: str) -> Any:
+        """The privileged baselines' planning navmesh: the data set's, eroded by `PLAN_MARGIN` more."""
+        if scene_id not in self._plan_navmeshes:
+            from ..navmesh import NavMesh
+
+            scene, _ = self.scene(scene_id)
+            nav = self.manifest.navmesh()
+            wider = replace(nav, agent_radius=float(nav.agent_radius) + PLAN_MARGIN)
+            self._plan_navmeshes[scene_id] = NavMesh.build_cached(scene, wider, self._navmesh_cache())
+        return self._plan_navmeshes[scene_id]
+
+    def fields(self, episode: Episode, planning: bool = False) -> list[Any]:
+        """Each agent's target distance field (on the planning navmesh when `planning`; None where the
+        target has no goal point there)."""
+        from ..episodes.goals import target_field
+        from ..errors import InputError
+
+        scene, navmesh = self.scene(episode.scene_id)
+        mesh = self._plan_navmesh(episode.scene_id) if planning else navmesh
+        out = []
+        for i in range(episode.num_agents):
+            key = (episode.scene_id, planning, target_key(episode, i))
+            if key in self._fields:
+                self._fields.move_to_end(key)
+            else:
+                inst = int(episode.target_instance_ids[i])
+                target = inst if inst >= 0 else np.asarray(episode.target_positions[i], dtype=np.float64)
+                try:
+                    field = target_field(mesh, scene, target, self.manifest)
+                    if planning and not np.any(field.reachable_targets):
+                        field = None
+                except InputError:
+                    if not planning:
+                        raise
+                    field = None
+                self._fields[key] = field
+                while len(self._fields) > FIELD_CACHE:
+                    self._fields.popitem(last=False)
+            out.append(self._fields[key])
+        return out
+
+    def close(self) -> None:
+        """Close the simulators."""
+        for sim in self._sims.values():
+            sim.close()
+        self._sims.clear()

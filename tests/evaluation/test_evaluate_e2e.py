@@ -1,0 +1,210 @@
+"""`main-bench evaluate` end to end on the tiny synthetic data set: results layout, metrics recomputed from the
+saved trajectories, determinism across --workers, resumption after SIGKILL, hostile policies, bad input."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from main_bench.episodes.dataset import load_episodes
+from main_bench.errors import PolicyFailure
+from main_bench.evaluation.metrics import episode_metrics, trace_from_frame
+from main_bench.evaluation.records import TEAM
+from main_bench.evaluation.results import _read, load_results
+from main_bench.evaluation.runner import evaluate
+from main_bench.evaluation.settings import EvalSettings, PolicyLimits
+
+POLICIES = Path(__file__).parent / "policies"
+WALKER = str(POLICIES / "short_walk.py")
+KEY = ["split", "task", "agents", "episode_id", "agent_index"]
+
+
+def _settings(tiny_dataset, out: Path, **kw) -> EvalSettings:
+    dataset, cache = tiny_dataset
+    base = {"episodes": dataset, "split": "val", "agent": WALKER, "out": out, "limit": 4, "chunk_size": 2,
+            "cache_dir": cache}
+    return EvalSettings(**{**base, **kw})
+
+
+def _frame(out: Path, kind: str) -> pd.DataFrame:
+    df = _read(out, kind)
+    keys = [*KEY[:4], "step", "agent_index"] if kind == "trajectories" else KEY
+    return df.astype({"split": str, "task": str}).sort_values(keys).reset_index(drop=True)
+
+
+@pytest.fixture(scope="module")
+def reference(tiny_dataset, tmp_path_factory):
+    """A finished run of the short-walk submission: 2 tracks x 4 episodes in chunks of 2, one worker."""
+    out = tmp_path_factory.mktemp("eval") / "reference"
+    outcome = evaluate(_settings(tiny_dataset, out))
+    assert outcome.chunks_run == 4 and outcome.episodes_run == 8
+    return out
+
+
+def test_results_layout_and_metrics_recomputed_from_trajectories(reference, tiny_dataset):
+    results = load_results(reference)
+    for kind in ("records", "trajectories"):
+        for task in ("shared", "individual"):
+            parts = sorted(p.name for p in (reference / kind / "split=val" / f"task={task}" / "agents=2").iterdir())
+            assert parts == ["part-00000.parquet", "part-00001.parquet"]
+    records = _frame(reference, "records")
+    assert not records.duplicated(KEY).any()
+    assert len(records) == 8 * 3 and (records["agent_index"] == TEAM).sum() == 8
+    assert (records["failure"] == "").all()
+    summary = results.summary
+    assert summary["counts"] == {"episodes": 8, "agent_rows": 16, "failed_episodes": 0, "failures_by_kind": {}}
+    assert set(summary["tracks"]) == {"val/shared/2", "val/individual/2"}
+    assert summary["dataset"]["manifest_hash"] and summary["submission"]["spec"] == WALKER
+    assert summary["task_rules"]["success_distance"] == 1.0 and summary["task_rules"]["max_steps"] == 500
+    team = summary["tracks"]["val/shared/2"]["team"]["spl"]
+    assert team["ci_low"] <= team["mean"] <= team["ci_high"]
+    # Metrics are pure functions of the saved trajectory and the episode row.
+    traj = _frame(reference, "trajectories")
+    episodes = {e.episode_id: e for e in load_episodes(tiny_dataset[0], "val")}
+    for (task, episode_id), rows in records.groupby(["task", "episode_id"]):
+        trace = trace_from_frame(episode_id, traj[traj["episode_id"] == episode_id])
+        assert trace.num_steps <= 7  # short walks: at most 5 moves, then found
+        agents, team_row = episode_metrics(trace, episodes[episode_id].geodesic_distances, task, 1.0)
+        for row in [*agents, team_row]:
+            saved = rows[rows["agent_index"] == row["agent_index"]].iloc[0]
+            for metric in ("success", "spl", "soft_spl", "distance_to_goal", "path_length", "steps", "collisions"):
+                assert saved[metric] == pytest.approx(row[metric], rel=1e-6, abs=1e-6), (episode_id, metric)
+        # the trajectory starts at the episode's start positions
+        start = traj[(traj["episode_id"] == episode_id) & (traj["step"] == 0)]
+        assert np.allclose(start[["x", "y"]].to_numpy(), episodes[episode_id].start_positions[:, :2], atol=1e-4)
+
+
+def test_workers_do_not_change_the_results(reference, tiny_dataset, tmp_path):
+    out = tmp_path / "two_workers"
+    evaluate(_settings(tiny_dataset, out, workers=2))
+    for kind in ("records", "trajectories"):
+        pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
+
+
+def test_resume_after_sigkill_has_no_duplicate_rows(reference, tiny_dataset, tmp_path, cli):
+    dataset, cache = tiny_dataset
+    out = tmp_path / "killed"
+    args = ["evaluate", "--episodes", dataset, "--split", "val", "--agent", WALKER, "--out", out, "--limit", "4",
+            "--chunk-size", "2", "--cache-dir", cache, "--no-progress"]
+    proc = subprocess.Popen([sys.executable, "-m", "main_bench.cli.app", *map(str, args)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    first = out / "records" / "split=val" / "task=individual" / "agents=2" / "part-00000.parquet"
+    deadline = time.monotonic() + 120
+    while not first.is_file() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL, "the run ended before it could be killed"
+    done = list((out / "records").rglob("part-*.parquet"))
+    assert 1 <= len(done) < 4 and not (out / "summary.json").exists()
+    again = cli(*args, "--json")
+    assert again.code == 0, again.err
+    doc = json.loads(again.out)
+    assert doc["chunks_skipped"] == len(done) and doc["chunks_run"] == 4 - len(done)
+    for kind in ("records", "trajectories"):
+        pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
+    assert load_results(out).summary["counts"]["episodes"] == 8
+
+
+def test_cli_oracle_resumes_finished_run_and_refuses_another(cli, tiny_dataset, tmp_path):
+    dataset, cache = tiny_dataset
+    out = tmp_path / "oracle"
+    args = ["evaluate", "--episodes", dataset, "--split", "val", "--agent", "baseline:oracle", "--out", out,
+            "--cache-dir", cache, "--json"]
+    first = cli(*args)
+    assert first.code == 0, first.err
+    doc = json.loads(first.out)
+    assert doc["command"] == "evaluate" and doc["counts"]["episodes"] == 16 and doc["counts"]["failed_episodes"] == 0
+    for track in doc["tracks"].values():  # the privileged upper bound: far above random (success 0 here)
+        assert track["team"]["success"]["mean"] >= 0.5 and track["team"]["spl"]["mean"] >= 0.25
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["submission"]["baseline"] is True and summary["submission"]["name"] == "baseline:oracle"
+    again = json.loads(cli(*args).out)
+    assert again["chunks_run"] == 0 and again["chunks_skipped"] == doc["chunks_run"]
+    assert again["tracks"] == doc["tracks"]
+    other = cli(*args[:-1], "--seed", "7")
+    assert other.code == 2 and "holds a different evaluation (differs in seed)" in other.err
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({"--episodes": "no/such/dataset"}, "no/such/dataset"),
+        ({"--split": "test"}, "no episodes in split 'test'"),
+        ({"--agent": "no/such/policy.py"}, "no such file"),
+        ({"--agents": "5"}, "no episodes for the chosen --task/--agents"),
+        ({"--renderer": "vulkan"}, "--renderer must be one of"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2_nothing_written(cli, tiny_dataset, tmp_path, change, words):
+    dataset, cache = tiny_dataset
+    opts = {"--episodes": str(dataset), "--split": "val", "--agent": "baseline:random", "--out": str(tmp_path / "r")}
+    opts.update(change)
+    res = cli("evaluate", *[x for kv in opts.items() for x in kv], "--cache-dir", cache)
+    assert res.code == 2 and words in res.err and "Traceback" not in res.err
+    assert not (tmp_path / "r").exists()
+
+
+def _hostile(tmp_path: Path, modes: dict[str, str]) -> str:
+    folder = tmp_path / "hostile"
+    folder.mkdir()
+    shutil.copy(POLICIES / "by_episode.py", folder / "policy.py")
+    (folder / "modes.json").write_text(json.dumps(modes))
+    return str(folder)
+
+
+def test_hostile_policy_fails_only_its_episodes_with_the_reason(tiny_dataset, tmp_path):
+    ids = [e.episode_id for e in load_episodes(tiny_dataset[0], "val", "shared", 2)]
+    modes = dict(zip(ids, ["raise", "ok", "hang", "garbage", "nan", "exit", "memory", "ok"], strict=True))
+    limits = PolicyLimits(step_seconds=3.0, episode_seconds=60.0, memory_mb=384)
+    settings = _settings(tiny_dataset, tmp_path / "out", agent=_hostile(tmp_path, modes), tasks=("shared",),
+                         limit=8, chunk_size=8, limits=limits, max_consecutive_failures=8)
+    outcome = evaluate(settings)
+    team = _frame(settings.out, "records")
+    team = team[team["agent_index"] == TEAM].set_index("episode_id")
+    expected = {"raise": "exception: ValueError: policy bug on purpose", "hang": "timeout: act took > 3 s",
+                "garbage": "invalid_action: agent_0 returned 'left' (str)",
+                "nan": "invalid_action: agent_0 returned nan (float)", "exit": "dead: exit code 3",
+                "memory": "memory: MemoryError in act", "ok": ""}
+    for episode_id, mode in modes.items():
+        reason = team.loc[episode_id, "failure"]
+        assert reason.startswith(expected[mode]) if mode != "ok" else reason == "", (mode, reason)
+        if mode != "ok":
+            assert team.loc[episode_id, "success"] == 0
+    assert outcome.summary["counts"]["failed_episodes"] == 6
+    assert outcome.summary["counts"]["failures_by_kind"] == {"dead": 1, "exception": 1, "invalid_action": 2,
+                                                             "memory": 1, "timeout": 1}
+
+
+def test_repeated_failure_stops_with_a_clear_report(tiny_dataset, tmp_path, cli):
+    ids = [e.episode_id for e in load_episodes(tiny_dataset[0], "val", "shared", 2)]
+    agent = _hostile(tmp_path, dict.fromkeys(ids, "raise"))
+    settings = _settings(tiny_dataset, tmp_path / "out", agent=agent, tasks=("shared",), limit=8,
+                         max_consecutive_failures=3)
+    with pytest.raises(PolicyFailure) as err:
+        evaluate(settings)
+    text = str(err.value)
+    assert "failed 3 episodes in a row; stopped" in text and "ValueError: policy bug on purpose" in text
+    assert "check-agent" in text
+    # the chunk finished before the stop is kept, the one that stopped is not written
+    assert [p.name for p in (settings.out / "records").rglob("part-*.parquet")] == ["part-00000.parquet"]
+    res = cli("evaluate", "--episodes", tiny_dataset[0], "--agent", agent, "--out", tmp_path / "cli", "--task",
+              "shared", "--max-failures", "2", "--cache-dir", tiny_dataset[1])
+    assert res.code == 1 and "failed 2 episodes in a row" in res.err and "Traceback" not in res.err
+
+
+def test_same_settings_replace_is_the_same_identity(tiny_dataset, tmp_path):
+    base = _settings(tiny_dataset, tmp_path / "a")
+    assert replace(base, workers=4, executor="ray").identity() == base.identity()
+    assert replace(base, seed=1).identity() != base.identity()
