@@ -44,10 +44,10 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
     from ..evaluation.settings import EvalSettings, SubmissionMeta
     from ..leaderboard.build import build_leaderboard
     from ..navmesh import NavMeshSettings
-    from ..stats.report import compute_stats
+    from ..stats.report import StatsSettings, compute_stats
 
     out = settings.out
-    cache = out / "cache"
+    cache = out / "cache"  # built-in houses, and their navmeshes under cache/navmesh (the CLI convention)
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
 
@@ -59,7 +59,7 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
         clock = now
 
     log(f"[1/5] built-in houses and their navmeshes -> {cache}")
-    sources = resolve_sources(["builtin"], only_splits=["val"], cache_dir=cache / "scenes")[: settings.houses]
+    sources = resolve_sources(["builtin"], only_splits=["val"], cache_dir=cache)[: settings.houses]
     lap("scenes")
     dataset = out / "episodes"
     log(f"[2/5] episodes ({len(sources)} houses, shared and individual targets, {settings.agents} agents)")
@@ -68,7 +68,7 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
                               cache_dir=cache / "navmesh")
     lap("episodes")
     log("[3/5] dataset statistics")
-    stats = compute_stats(dataset, out / "stats")
+    stats = compute_stats(dataset, out / "stats", StatsSettings(cache_dir=cache))
     lap("stats")
     results: dict[str, Path] = {}
     for name in DEMO_BASELINES:
@@ -76,7 +76,7 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
         target = out / "results" / name
         evaluate(EvalSettings(episodes=dataset, split="val", agent=f"baseline:{name}", out=target,
                               workers=settings.workers, renderer=settings.renderer, limit=settings.limit,
-                              seed=settings.seed, cache_dir=cache / "navmesh",
+                              seed=settings.seed, cache_dir=cache,
                               submission=SubmissionMeta(name=name, baseline=True,
                                                         description=f"main-bench built-in {name} baseline")))
         results[name] = target

@@ -45,8 +45,10 @@ def _bracket(dx, dy):
 
 
 @njit(cache=True)
-def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol):
-    """Walk the cells the segment from node v's centre to (sx, sy, sz) crosses (goal = node of that point).
+def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
+    """Walk the cells the segment from node v's point to (sx, sy, sz) crosses (goal = node of that point).
+
+    (px, py): the nodes' points, (cx, cy): their cell centres (a point lies within its cell).
 
     True when each crossed cell is linked to the previous one and its height stays within ztol of the line.
     """
@@ -61,8 +63,8 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol):
     # parameter t in [0, 1] along the segment where the next x / y cell boundary is crossed
     tdx = cs / abs(dx) if dx != 0 else np.inf
     tdy = cs / abs(dy) if dy != 0 else np.inf
-    tmx = 0.5 * tdx
-    tmy = 0.5 * tdy
+    tmx = (0.5 - stepx * (x - cx[v]) / cs) * tdx if dx != 0 else np.inf
+    tmy = (0.5 - stepy * (y - cy[v]) / cs) * tdy if dy != 0 else np.inf
     cur = v
     limit = int(abs(dx) / cs + abs(dy) / cs) + 3
     for _ in range(limit):
@@ -99,8 +101,11 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol):
 
 
 @njit(cache=True)
-def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64)):
+def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats=np.zeros(4, np.int64)):
     """Multi-source any-angle Dijkstra. Returns (g, anchor, root) per node; anchor and root -1 where unreached.
+
+    (px, py, pz): each node's point (its corner point near walls, see `build.anchor_offsets`), (cx, cy): the
+    centres of their cells.
 
     root: the index of the target whose propagation reached the node (the end of its path).
     """
@@ -151,7 +156,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64
             d = np.sqrt(dh * dh + dz * dz)
             if d >= g[v] or dh <= 1e-9:
                 continue
-            if not _line_of_sight(v, u, tpos[j, 0], tpos[j, 1], tpos[j, 2], nbr, px, py, pz, cs, ztol):
+            if not _line_of_sight(v, u, tpos[j, 0], tpos[j, 1], tpos[j, 2], nbr, px, py, pz, cs, ztol, cx, cy):
                 continue
             g[v] = d
             anchor[v] = n + j
@@ -212,7 +217,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, stats=np.zeros(4, np.int64
                     # the cheap test fails near shadow edges and ties: walk the segment cell by cell
                     goal = s if s < n else tnode[s - n]
                     stats[0] += 1
-                    ok = _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol)
+                    ok = _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy)
                     stats[1] += int(dh / cs)
                     stats[2] += ok
                     lo = (hz - ztol) / dh

@@ -12,12 +12,12 @@ from . import _graph, _raster
 from .settings import NavMeshSettings
 
 #: Bumped whenever the build's output for the same inputs changes; part of the cache key.
-ALGORITHM_VERSION = 3
+ALGORITHM_VERSION = 4
 #: Nodes are kept when their centre is at least agent_radius - ERODE_SLACK * cell_size from the nearest
-#: obstacle (walls located within their cell, see `_graph.blocking_rects`). Paths wrap around corners through
-#: node centres and cross only whole kept cells, which puts them about 0.5 to 0.9 cells further out than the
-#: kept centres; 0.7 centres the wrap radius on agent_radius (measured on the analytic layouts of the tests).
-ERODE_SLACK = 0.7
+#: obstacle (walls located within their cell, see `_graph.blocking_rects`); near obstacles, distances are
+#: measured through points moved onto the agent_radius contour (`anchor_offsets`). 0.4 gives the smallest
+#: worst-case error on the analytic layouts of the tests over many sub-cell offsets of the walls.
+ERODE_SLACK = 0.4
 #: Smoothing of node heights for distances (stairs -> ramps), in metres of Gaussian-like width.
 SMOOTH_WIDTH_M = 0.15
 
@@ -38,6 +38,8 @@ class Grid:
     nbr: np.ndarray  # (N, 8) int64 linked node per direction or -1
     island: np.ndarray  # (N,) int64, 0 = largest island
     col_start: np.ndarray  # (nx*ny + 1,) int64 CSR offsets of nodes per column
+    ox: np.ndarray | None = None  # (N,) float64 x offset (m) of the node's point from its cell centre
+    oy: np.ndarray | None = None  # (N,) float64 y offset (m)
 
 
 def column_starts(ix: np.ndarray, iy: np.ndarray, nx: int, ny: int) -> np.ndarray:
@@ -87,7 +89,7 @@ def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> G
         span_start = np.searchsorted(col, np.arange(nx * ny + 1))
         rects = _graph.blocking_rects(nbr, ix, iy, nz, nx, ny, span_start, zlo, zhi, rect, x0, y0, cs,
                                       float(s.max_climb), float(s.agent_height))
-        dist, nearest = _graph.clearance(nbr, ix, iy, rects, thr + 1.0)
+        dist, nearest = _graph.clearance(nbr, ix, iy, rects, thr + 2.0)
         keep = dist >= thr
         if not keep.any():
             raise NavMeshError(f"no walkable area is wide enough for agent_radius={s.agent_radius} m; "
@@ -95,6 +97,10 @@ def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> G
         eroded = _raster.diagonals(_graph.compact_links(nbr, keep))
         nbr = _graph.relax_diagonals(nbr, keep, eroded, ix, iy, nearest, thr)
         ix, iy, nz = ix[keep], iy[keep], nz[keep]
+        ox, oy = anchor_offsets(ix, iy, dist[keep], nearest[keep], s.agent_radius / cs)
+        ox, oy = ox * cs, oy * cs
+    else:
+        ox = oy = np.zeros(len(nz))
     label = _graph.components(nbr)
     counts = np.bincount(label)
     big = counts * cs * cs >= s.region_min_size
@@ -104,7 +110,7 @@ def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> G
     keep = big[label]
     if not keep.all():
         nbr = _graph.compact_links(nbr, keep, 8)
-        ix, iy, nz, label = ix[keep], iy[keep], nz[keep], label[keep]
+        ix, iy, nz, label, ox, oy = ix[keep], iy[keep], nz[keep], label[keep], ox[keep], oy[keep]
     # islands numbered largest first; ties broken by first node (stable)
     kept_labels = np.flatnonzero(big)
     rank = np.argsort(-counts[kept_labels], kind="stable")
@@ -113,7 +119,33 @@ def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> G
     island = relabel[label]
     zs = _graph.smooth_heights(nbr, nz, smooth_iterations(cs))
     return Grid(x0=float(x0), y0=float(y0), cell_size=cs, nx=nx, ny=ny, ix=ix, iy=iy, z=nz, zs=zs, nbr=nbr,
-                island=island, col_start=column_starts(ix, iy, nx, ny))
+                island=island, col_start=column_starts(ix, iy, nx, ny), ox=ox, oy=oy)
+
+
+def anchor_offsets(ix: np.ndarray, iy: np.ndarray, dist: np.ndarray, nearest: np.ndarray,
+                   radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (in cells) that move node centres near an obstacle onto the agent-radius contour.
+
+    Paths bend around corners through node points; with points on the contour (not at cell centres a fraction
+    of a cell further in or out) they wrap obstacles at the agent radius itself. A point moves along the
+    line from the nearest obstacle point to the centre, by at most half a cell per axis (it stays in its cell).
+    """
+    ox = np.zeros(len(ix))
+    oy = np.zeros(len(ix))
+    near = np.isfinite(dist) & (np.abs(dist - radius) <= 0.75)
+    cx = ix[near] + 0.5
+    cy = iy[near] + 0.5
+    rect = nearest[near]
+    qx = np.clip(cx, rect[:, 0], rect[:, 2])
+    qy = np.clip(cy, rect[:, 1], rect[:, 3])
+    vx, vy = cx - qx, cy - qy
+    norm = np.hypot(vx, vy)
+    ok = norm > 1e-9
+    scale = np.where(ok, (radius - norm) / np.maximum(norm, 1e-9), 0.0)
+    lim = 0.5 - 1e-6
+    ox[near] = np.clip(vx * scale, -lim, lim)
+    oy[near] = np.clip(vy * scale, -lim, lim)
+    return ox, oy
 
 
 def find_floors(z: np.ndarray, cell_area: float, s: NavMeshSettings) -> list[tuple[float, float]]:

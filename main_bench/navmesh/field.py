@@ -41,8 +41,9 @@ class DistanceField:
         self._tpos = np.ascontiguousarray(tpos)
         self._tpos_surface = tpos.copy()
         self._tpos_surface[:, 2] = g.z[safe]
-        self._g, self._anchor, self._root = _field.propagate(g.nbr, navmesh._px, navmesh._py, g.zs, nodes, self._tpos,
-                                                 LINE_Z_TOLERANCE, g.cell_size)
+        self._g, self._anchor, self._root = _field.propagate(g.nbr, navmesh._ax, navmesh._ay, g.zs, nodes,
+                                                             self._tpos, LINE_Z_TOLERANCE, g.cell_size,
+                                                             navmesh._px, navmesh._py)
 
     @property
     def reachable_targets(self) -> np.ndarray:
@@ -65,7 +66,7 @@ class DistanceField:
         nm = self.navmesh
         g = nm._grid
         nodes = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
-        d = _field.lookup(pts, nodes, self._g, self._anchor, self._root, nm._px, nm._py, g.zs, g.z, self._tpos,
+        d = _field.lookup(pts, nodes, self._g, self._anchor, self._root, nm._ax, nm._ay, g.zs, g.z, self._tpos,
                           self._tpos_surface, g.x0, g.y0, g.cell_size, g.ix, g.iy)
         return float(d[0]) if single else d
 
@@ -87,7 +88,7 @@ class DistanceField:
         out = [start]
         a = int(self._anchor[node])
         while a < n:
-            out.append(np.array([nm._px[a], nm._py[a], g.z[a]]))
+            out.append(np.array([nm._ax[a], nm._ay[a], g.z[a]]))
             a = int(self._anchor[a])
         out.append(self._tpos_surface[a - n])
         return _dedupe(np.array(out))

@@ -87,6 +87,9 @@ class NavMesh:
         cs = grid.cell_size
         self._px = grid.x0 + (grid.ix + 0.5) * cs
         self._py = grid.y0 + (grid.iy + 0.5) * cs
+        # the points distances are measured through: cell centres, moved onto the agent_radius contour near walls
+        self._ax = self._px + (grid.ox if grid.ox is not None else 0.0)
+        self._ay = self._py + (grid.oy if grid.oy is not None else 0.0)
         self._below = settings.max_climb + _ABOVE_EXTRA
         self._above = settings.agent_height
         if floors is None:
@@ -155,7 +158,8 @@ class NavMesh:
         buf = io.BytesIO()
         np.savez_compressed(buf, meta=np.frombuffer(json.dumps(meta).encode(), np.uint8),
                             ix=g.ix.astype(np.int32), iy=g.iy.astype(np.int32), z=g.z, zs=g.zs,
-                            nbr=g.nbr.astype(np.int32), island=g.island.astype(np.int32))
+                            nbr=g.nbr.astype(np.int32), island=g.island.astype(np.int32),
+                            ox=self._ax - self._px, oy=self._ay - self._py)
         with atomic_path(path) as tmp:
             tmp.write_bytes(buf.getvalue())
 
@@ -186,7 +190,7 @@ class NavMesh:
             grid = Grid(x0=float(gm["x0"]), y0=float(gm["y0"]), cell_size=float(gm["cell_size"]), nx=nx, ny=ny,
                         ix=ix, iy=iy, z=arrays["z"].astype(np.float64), zs=arrays["zs"].astype(np.float64),
                         nbr=arrays["nbr"].astype(np.int64), island=arrays["island"].astype(np.int64),
-                        col_start=column_starts(ix, iy, nx, ny))
+                        col_start=column_starts(ix, iy, nx, ny), ox=arrays.get("ox"), oy=arrays.get("oy"))
             settings = NavMeshSettings.from_json(meta["settings"])
             nm = cls(grid, settings, str(meta["scene_id"]), str(meta["scene_hash"]), str(meta["geometry_hash"]),
                      [(float(a), float(b)) for a, b in meta["floors"]])

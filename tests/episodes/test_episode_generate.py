@@ -14,6 +14,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 from ep_scenes import dataset_bytes, room_meshes, write_scene
+from mb_testing import need
 
 from main_bench.episodes.dataset import load_table, read_manifest
 from main_bench.io import sha256_file
@@ -127,7 +128,11 @@ def test_worker_count_does_not_change_the_bytes(gen, tmp_path):
 
 @pytest.fixture
 def local_ray():
-    ray = pytest.importorskip("ray", reason="the Ray executor test needs ray (pip install 'main-bench[ray]')")
+    try:
+        import ray
+    except ImportError:
+        ray = None
+    need(ray is not None, "the Ray executor test needs ray (pip install 'main-bench[ray]')")
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
     yield ray
     ray.shutdown()

@@ -147,16 +147,16 @@ def test_settings_refuse_bad_values():
 
 
 def test_ratio_thinning_removes_near_straight_agents(tmp_path):
-    path = furnished_room(tmp_path / "furn.obj")
+    path = l_corridor(tmp_path / "l.obj")
     ratios = {}
     for threshold in (0.0, 1.1):
-        settings = GenerationSettings(ratio_threshold=threshold)
+        settings = GenerationSettings(ratio_threshold=threshold, point_goal_episodes=4)
         batch, report = sample_episodes(_bank(path, settings), settings, "shared", 2, 300,
                                         np.random.default_rng(4), SEP)
         assert len(batch) == 300
         ratios[threshold] = (batch.geodesic / batch.euclidean).reshape(-1)
         if threshold:
             assert report.rejections["near-straight (ratio thinning)"] > 0
-    # In an open room most agents see their target almost straight; Habitat's rule keeps few of them.
+    # Most pairs in the corridor see each other straight; Habitat's rule keeps few of those.
     low_off, low_on = (ratios[0.0] < 1.1).mean(), (ratios[1.1] < 1.1).mean()
-    assert low_off > 0.5 and low_on < low_off / 3
+    assert low_off > 0.5 and low_on < low_off / 2, (low_off, low_on)

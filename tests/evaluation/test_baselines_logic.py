@@ -136,3 +136,14 @@ def test_privileged_lookup():
     assert isinstance(privileged_baseline(" baseline:random")(0), RandomBaseline)
     assert privileged_baseline("baseline:comm") is None
     assert privileged_baseline("my.module:Policy") is None
+
+
+def test_oracle_does_not_stop_in_another_agents_way():
+    # Agent 1's path runs along y = 0.3 through agent 0's target: agent 0 walks deeper before calling found.
+    in_the_way = ToyWorld([[0, 0, 0], [-3, 0.3, 0]], [0.0, 0.0], [[3, 0, 0], [9, 0.3, 0]])
+    calls, _ = play(OracleBaseline(seed=1), in_the_way, 2)
+    assert calls[0][1] <= 0.25
+    # Agent 1 walks far away from agent 0's target: agent 0 calls once within 0.7 x the success distance.
+    clear = ToyWorld([[0, 0, 0], [-3, 3, 0]], [0.0, math.pi / 2], [[3, 0, 0], [-3, 9, 0]])
+    calls, _ = play(OracleBaseline(seed=1), clear, 2)
+    assert 0.25 < calls[0][1] <= 0.7

@@ -96,14 +96,25 @@ def test_other_agents_visible_in_their_colours_never_self(kind):
 
 
 def _free_poses(scene, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """`count` feet positions on the ground floor (z = 0) where an agent fits, and random yaws."""
+    """`count` feet positions on the ground floor (z = 0) where an agent can stand: its body overlaps nothing,
+    nothing lies over its head up to 2 m (so it is not inside a solid bigger than itself, which the wall probe
+    cannot see) and the agents are at least 2 radii apart; and random yaws."""
+    import pybullet as pb
+
     rng = np.random.default_rng(seed)
     lo, hi = scene.bounds[0, :2] + 0.5, scene.bounds[1, :2] - 0.5
+    feet: list[np.ndarray] = []
     with Simulator(scene, None, SimSettings(renderer="tiny")) as sim:
-        feet = [p for p in np.column_stack([rng.uniform(lo, hi, (80, 2)), np.zeros(80)])
-                if sim._world.ground_height(p[0], p[1], 0.0) == 0.0 and sim._world.penetration(p) == 0.0]
-    assert len(feet) >= count
-    return np.array(feet[:count]), rng.uniform(-math.pi, math.pi, count)
+        world = sim._world
+        for p in np.column_stack([rng.uniform(lo, hi, (200, 2)), np.zeros(200)]):
+            hit = pb.rayTest((p[0], p[1], 2.0), (p[0], p[1], -0.05), physicsClientId=world.client)[0]
+            if (hit[0] >= 0 and abs(hit[3][2]) < 1e-6 and world.penetration(p) == 0.0
+                    and all(np.linalg.norm(p[:2] - q[:2]) >= 0.36 for q in feet)):
+                feet.append(p)
+            if len(feet) == count:
+                break
+    assert len(feet) == count
+    return np.array(feet), rng.uniform(-math.pi, math.pi, count)
 
 
 @pytest.mark.parametrize("scene_name", ["room", "box_house", "builtin house_0000", "builtin house_0001"])
@@ -304,3 +315,32 @@ def test_agent_cylinders_have_the_data_sets_body(kind):
     assert depth[64, 64] == pytest.approx(2.0 - 0.3, rel=0.02)  # near side of a 0.3 m cylinder
     assert depth[62, 64] == pytest.approx(1.7, rel=0.02)  # just below its top (0.15 m above the camera)
     assert depth[57, 64] == pytest.approx(4.0, rel=0.02)  # above its top (a 1.5 m agent would cover it)
+
+
+def test_closed_outward_parts_are_found_per_component():
+    from main_bench.sim.render.materials import closed_outward
+
+    box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    assert closed_outward(box).all()
+    inward = trimesh.Trimesh(box.vertices, box.faces[:, ::-1], process=False)
+    assert not closed_outward(inward).any()
+    open_box = trimesh.Trimesh(box.vertices, box.faces[:-2], process=False)
+    assert not closed_outward(open_box).any()
+    moved = inward.copy()
+    moved.apply_translation((5.0, 0.0, 0.0))
+    both = trimesh.util.concatenate([box, moved])
+    np.testing.assert_array_equal(closed_outward(both), np.repeat([True, False], 12))
+
+
+def test_open_surfaces_are_seen_from_both_sides():
+    """Back-face culling only applies to closed parts: a single-sided wall is seen from behind too."""
+    need(GL_OK, "gl renderer needs EGL + Mesa")
+    scene = _textured_wall_scene()  # the wall at x = 2 is one open quad facing -X
+    for kind in BACKENDS:
+        r = make_renderer(kind, scene, CAM)
+        try:
+            depth = r.render(np.array([[0.0, 0.0, 0.0], [4.0, 0.0, 0.0]]), np.array([0.0, math.pi]))[1]
+        finally:
+            r.close()
+        assert depth[0, 40, 64, 0] == pytest.approx(2.0, rel=0.02), kind
+        assert depth[1, 40, 64, 0] == pytest.approx(2.0, rel=0.02), kind

@@ -27,7 +27,9 @@ class Surfaces:
 
     `corners` (F, 3, 3) float32 metres; `colors` (F, 3, 4) uint8 RGBA per corner (already multiplied by the
     material's base colour); `uvs` (F, 3, 2) float32; `layer` (F,) int32: index into `textures`, -1 = none;
-    `textures`: RGBA uint8 images, each TEXTURE_SIZE x TEXTURE_SIZE, row 0 = top of the image.
+    `textures`: RGBA uint8 images, each TEXTURE_SIZE x TEXTURE_SIZE, row 0 = top of the image; `closed` (F,)
+    bool: the face belongs to a closed, outward-wound surface (`closed_outward`), so it is never seen from
+    behind unless the viewer is inside a solid, and a renderer may cull it when it faces away.
     """
 
     corners: np.ndarray
@@ -35,6 +37,7 @@ class Surfaces:
     uvs: np.ndarray
     layer: np.ndarray
     textures: tuple[np.ndarray, ...]
+    closed: np.ndarray
 
     def face_colors(self) -> np.ndarray:
         """(F, 4) uint8 colour per face: mean corner colour, times the mean texel around the face's UVs."""
@@ -82,7 +85,7 @@ def _texture_array(image: Image.Image) -> np.ndarray:
 
 def scene_surfaces(scene: Scene) -> Surfaces:
     """Flatten the scene's parts into one triangle soup with colours, UVs and texture layers."""
-    corners, colors, uvs, layers = [], [], [], []
+    corners, colors, uvs, layers, closed = [], [], [], [], []
     textures: list[np.ndarray] = []
     image_ids: dict[int, int] = {}
     for mesh in scene.meshes:
@@ -114,13 +117,29 @@ def scene_surfaces(scene: Scene) -> Surfaces:
         colors.append(col)
         uvs.append(uv)
         layers.append(layer)
+        closed.append(closed_outward(mesh))
     return Surfaces(
         corners=np.concatenate(corners).astype(np.float32),
         colors=np.concatenate(colors).astype(np.uint8),
         uvs=np.concatenate(uvs),
         layer=np.concatenate(layers),
         textures=tuple(textures),
+        closed=np.concatenate(closed),
     )
+
+
+def closed_outward(mesh: trimesh.Trimesh) -> np.ndarray:
+    """(F,) bool: faces of connected components that are closed (the mesh is watertight with consistent
+    winding) and wound outward (positive enclosed volume). All False for an open or inconsistent mesh."""
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    out = np.zeros(len(faces), dtype=bool)
+    if len(faces) == 0 or not (mesh.is_watertight and mesh.is_winding_consistent):
+        return out
+    labels = trimesh.graph.connected_component_labels(mesh.face_adjacency, node_count=len(faces))
+    tri = np.asarray(mesh.vertices, dtype=np.float64)[faces]
+    signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
+    volume = np.bincount(labels, weights=signed)
+    return volume[labels] > 1e-9
 
 
 def face_normals(corners: np.ndarray) -> np.ndarray:

@@ -2,7 +2,8 @@
 
 It renders a private pybullet world holding only visual shapes: the scene's triangles grouped by colour
 (one visual mesh per colour; textures are reduced to one colour per face, sampled at the face's UV centre,
-because this renderer takes one colour per shape) and one coloured cylinder per agent. Each agent's view
+because this renderer takes one colour per shape; faces of open parts are doubled back to back, because it
+culls back faces) and one coloured cylinder per agent. Each agent's view
 is one `getCameraImage` call with that agent's own cylinder moved out of sight. pybullet returns a
 non-linear depth buffer d in [0, 1]; z-depth is near*far / (far - (far - near) * d).
 """
@@ -55,7 +56,11 @@ class TinyRenderer:
         self._agents: list[int] = []
         surf = scene_surfaces(scene)
         labels, palette = _color_groups(surf.face_colors())
-        corners = surf.corners.astype(np.float64)
+        # TinyRenderer draws front faces only: open parts get a reversed copy of each face, so that they are
+        # seen from both sides as in `gl` (closed outward-wound parts are never seen from behind anyway).
+        open_faces = np.nonzero(~surf.closed)[0]
+        corners = np.concatenate([surf.corners, surf.corners[open_faces, ::-1]]).astype(np.float64)
+        labels = np.concatenate([labels, labels[open_faces]])
         normals = face_normals(corners)
         chunk = MAX_MESH_VERTICES // 3
         for g, rgba in enumerate(palette):
