@@ -1,4 +1,4 @@
-"""Navmesh speed benchmark: `python tools/bench_navmesh.py [--json] [--quick]` (see main_bench.benchmarks.navmesh)."""
+"""Navmesh benchmark: `python tools/bench_navmesh.py [--json] [--quick]` (main_bench.benchmarks.navmesh)."""
 
 from __future__ import annotations
 
@@ -18,16 +18,24 @@ def main() -> None:
         print(json.dumps(result, indent=2))
         return
     m = result["machine"]
-    print(f"{m['cpus']} CPUs, {m['platform']}, load {m['load_average_1min_at_start']} -> "
-          f"{m['load_average_1min_at_end']}")
+    print(
+        f"{m['cpus']} CPUs, {m['platform']}, load {m['load_average_1min_at_start']} -> "
+        f"{m['load_average_1min_at_end']}"
+    )
     for b in result["builds"]:
-        print(f"build {b['scene']}: {b['build_s']} s median, cpu {b['build_cpu_s']} s (first call {b['first_call_s']} s), "
-              f"{b['navigable_area_m2']} m^2, {b['islands']} islands, {b['floors']} floors")
+        print(
+            f"build {b['scene']}: {b['build_s']} s median, cpu {b['build_cpu_s']} s "
+            f"(first call {b['first_call_s']} s), "
+            f"{b['navigable_area_m2']} m^2, {b['islands']} islands, {b['floors']} floors"
+        )
     for f in result["fields"]:
-        print(f"field {f['scene']}: {f['field_ms']} ms, cpu {f['field_cpu_ms']} ms ({f['field_cpu_ms_per_200m2']} cpu ms "
-              f"per 200 m^2, {f['cells']} cells), "
-              f"{f['lookups_per_s']:,} look-ups/s, networkx {f.get('networkx_ms')} ms "
-              f"(x{f.get('networkx_over_field')}), scipy {f['scipy_dijkstra_ms']} ms")
+        print(
+            f"field {f['scene']}: {f['field_ms']} ms, cpu {f['field_cpu_ms']} ms "
+            f"({f['field_cpu_ms_per_200m2']} cpu ms "
+            f"per 200 m^2, {f['cells']} cells), "
+            f"{f['lookups_per_s']:,} look-ups/s, networkx {f.get('networkx_ms')} ms "
+            f"(x{f.get('networkx_over_field')}), scipy {f['scipy_dijkstra_ms']} ms"
+        )
     if result["coverage"]:
         print(f"coverage {result['coverage']}")
     print(f"goals met: {result['goals_met']}")

@@ -68,7 +68,9 @@ def _graph_baselines(nm: NavMesh, target_cell: int, repeats: int) -> dict[str, A
     n = len(nm.cells())
     out: dict[str, Any] = {}
     mat = csr_matrix((w, (src, dst)), shape=(n, n))
-    out["scipy_dijkstra_ms"] = round(1e3 * _median_times(lambda: dijkstra(mat, indices=target_cell), repeats)[0], 2)
+    out["scipy_dijkstra_ms"] = round(
+        1e3 * _median_times(lambda: dijkstra(mat, indices=target_cell), repeats)[0], 2
+    )
     try:
         import networkx as nx
     except ImportError:
@@ -77,7 +79,9 @@ def _graph_baselines(nm: NavMesh, target_cell: int, repeats: int) -> dict[str, A
         return out
     g = nx.Graph()
     g.add_weighted_edges_from(zip(src.tolist(), dst.tolist(), w.tolist(), strict=True))
-    t, _, _ = _median_times(lambda: nx.single_source_dijkstra_path_length(g, target_cell), max(1, repeats // 3))
+    t, _, _ = _median_times(
+        lambda: nx.single_source_dijkstra_path_length(g, target_cell), max(1, repeats // 3)
+    )
     out["networkx_ms"] = round(1e3 * t, 2)
     return out
 
@@ -95,11 +99,16 @@ def _field_row(name: str, nm: NavMesh, quick: bool, rng: np.random.Generator) ->
     look_s, _, d = _median_times(lambda: field.distance(pts), 3 if quick else 5)
     area = nm.navigable_area
     row: dict[str, Any] = {
-        "scene": name, "navigable_area_m2": round(area, 2), "cells": int(len(nm.cells())),
-        "field_ms": round(1e3 * field_s, 2), "field_cpu_ms": round(1e3 * field_cpu_s, 2),
+        "scene": name,
+        "navigable_area_m2": round(area, 2),
+        "cells": int(len(nm.cells())),
+        "field_ms": round(1e3 * field_s, 2),
+        "field_cpu_ms": round(1e3 * field_cpu_s, 2),
         "field_ms_per_200m2": round(1e3 * field_s * 200.0 / area, 2),
         "field_cpu_ms_per_200m2": round(1e3 * field_cpu_s * 200.0 / area, 2),
-        "lookups": n_look, "lookups_per_s": round(n_look / look_s), "reachable_share": round(float(np.isfinite(d).mean()), 4),
+        "lookups": n_look,
+        "lookups_per_s": round(n_look / look_s),
+        "reachable_share": round(float(np.isfinite(d).mean()), 4),
     }
     target_cell = int(field.target_nodes[0])
     base = _graph_baselines(nm, target_cell, 3 if quick else 5)
@@ -110,15 +119,24 @@ def _field_row(name: str, nm: NavMesh, quick: bool, rng: np.random.Generator) ->
     return row
 
 
-def _build_row(name: str, scene: Any, settings: NavMeshSettings, quick: bool) -> tuple[dict[str, Any], NavMesh]:
+def _build_row(
+    name: str, scene: Any, settings: NavMeshSettings, quick: bool
+) -> tuple[dict[str, Any], NavMesh]:
     first = time.perf_counter()
     nm = NavMesh.build(scene, settings)
     first_s = time.perf_counter() - first
     build_s, build_cpu_s, nm = _median_times(lambda: NavMesh.build(scene, settings), 3 if quick else 7)
-    return {"scene": name, "triangles": int(len(scene.faces)), "cell_size": settings.cell_size,
-            "build_s": round(build_s, 3), "build_cpu_s": round(build_cpu_s, 3), "first_call_s": round(first_s, 3),
-            "navigable_area_m2": round(nm.navigable_area, 2), "islands": len(nm.islands),
-            "floors": len(nm.floors)}, nm
+    return {
+        "scene": name,
+        "triangles": int(len(scene.faces)),
+        "cell_size": settings.cell_size,
+        "build_s": round(build_s, 3),
+        "build_cpu_s": round(build_cpu_s, 3),
+        "first_call_s": round(first_s, 3),
+        "navigable_area_m2": round(nm.navigable_area, 2),
+        "islands": len(nm.islands),
+        "floors": len(nm.floors),
+    }, nm
 
 
 def _coverage(folder: Path) -> dict[str, Any]:
@@ -130,8 +148,10 @@ def _coverage(folder: Path) -> dict[str, Any]:
     v[:, 2] += 0.740358  # the README's move (0, 0.740358, 0) in the file's +Y-up frame
     nm = NavMesh.from_triangles(v, scene.faces, NavMeshSettings(), scene_id="recast_nav_test")
     ref = load_scene(folder / "ref_three_pathfinding_level.nav.glb")
-    return {"scene": "recast_nav_test.obj x0.2 vs ref_three_pathfinding_level.nav.glb",
-            **coverage_overlap(nm, ref.vertices, ref.faces, z_tolerance=0.3).to_json()}
+    return {
+        "scene": "recast_nav_test.obj x0.2 vs ref_three_pathfinding_level.nav.glb",
+        **coverage_overlap(nm, ref.vertices, ref.faces, z_tolerance=0.3).to_json(),
+    }
 
 
 def run(quick: bool = False) -> dict[str, Any]:
@@ -159,13 +179,25 @@ def run(quick: bool = False) -> dict[str, Any]:
     real_build = next((b for b in builds if "real" in b["scene"]), None)
     goals = {
         "build_small_house_s<=1": None if real_build is None else real_build["build_s"] <= GOAL_BUILD_S,
-        "field_ms_per_200m2<=50 (wall)": all(f["field_ms_per_200m2"] <= GOAL_FIELD_MS_PER_200M2 for f in fields),
-        "field_ms_per_200m2<=50 (cpu)": all(f["field_cpu_ms_per_200m2"] <= GOAL_FIELD_MS_PER_200M2 for f in fields),
+        "field_ms_per_200m2<=50 (wall)": all(
+            f["field_ms_per_200m2"] <= GOAL_FIELD_MS_PER_200M2 for f in fields
+        ),
+        "field_ms_per_200m2<=50 (cpu)": all(
+            f["field_cpu_ms_per_200m2"] <= GOAL_FIELD_MS_PER_200M2 for f in fields
+        ),
         "lookups_per_s>=1e6": all(f["lookups_per_s"] >= GOAL_LOOKUPS_PER_S for f in fields),
     }
     return {
-        "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "python": platform.python_version(),
-                    "load_average_1min_at_start": load0,
-                    "load_average_1min_at_end": os.getloadavg()[0] if hasattr(os, "getloadavg") else None},
-        "quick": quick, "builds": builds, "fields": fields, "coverage": coverage, "goals_met": goals,
+        "machine": {
+            "cpus": os.cpu_count(),
+            "platform": platform.platform(),
+            "python": platform.python_version(),
+            "load_average_1min_at_start": load0,
+            "load_average_1min_at_end": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+        },
+        "quick": quick,
+        "builds": builds,
+        "fields": fields,
+        "coverage": coverage,
+        "goals_met": goals,
     }

@@ -46,7 +46,7 @@ def _scenes(quick: bool, workdir: Path) -> list[tuple[str, Scene]]:
         real = os.environ.get("MAIN_BENCH_REAL_SCENES") or str(Path(__file__).resolve().parents[3] / "shared" / "scenes")
         house = Path(real) / "aws_small_house_visual_yup.glb"
         if house.is_file():
-            out.append(("aws_small_house_visual (real, textured)", load_scene(house)))
+            out.append(("aws_small_house_visual (real, furnished)", load_scene(house)))
     return out
 
 

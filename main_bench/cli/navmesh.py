@@ -1,4 +1,4 @@
-"""`main-bench navmesh`: build a navmesh file from a scene, inspect it, query distances and paths, draw, export."""
+"""`main-bench navmesh`: build a navmesh file from a scene, inspect it, query distances and paths, draw it."""
 
 from __future__ import annotations
 
@@ -20,8 +20,12 @@ ToOption = typer.Option(..., "--to", help="Goal point x,y,z (m, +Z up, feet heig
 
 @app.command("build")
 def build(
-    scene: str = typer.Argument(..., help="Scene file (.glb, .gltf, .obj, .ply) or a built-in house id (house_0007)."),
-    out: Path = typer.Option(..., "--out", "-o", help="Navmesh file to write (reused if built from the same inputs)."),
+    scene: str = typer.Argument(
+        ..., help="Scene file (.glb, .gltf, .obj, .ply) or a built-in house id (house_0007)."
+    ),
+    out: Path = typer.Option(
+        ..., "--out", "-o", help="Navmesh file to write (reused if built from the same inputs)."
+    ),
     up: str = typer.Option("auto", "--up", help="Up axis of the file: y, z or auto."),
     scale: float | None = typer.Option(None, "--scale", help="Metres per file unit (default: detect)."),
     agent_radius: float = typer.Option(0.18, "--agent-radius", help="Agent radius (m)."),
@@ -31,10 +35,12 @@ def build(
     cell_size: float = typer.Option(0.05, "--cell-size", help="Grid cell size (m)."),
     cell_height: float = typer.Option(0.05, "--cell-height", help="Vertical resolution (m)."),
     region_min_size: float = typer.Option(0.05, "--region-min-size", help="Smallest island kept (m^2)."),
-    force: bool = typer.Option(False, "--force", help="Rebuild even when --out was built from the same inputs."),
+    force: bool = typer.Option(
+        False, "--force", help="Rebuild even when --out was built from the same inputs."
+    ),
     as_json: bool = JsonOption,
 ) -> None:
-    """Build the walkable surface of a scene for an agent; write it to --out with its settings and scene hash."""
+    """Build the walkable surface of a scene for an agent; write it to --out with settings and scene hash."""
     import time
 
     from ..navmesh import NavMesh, NavMeshSettings
@@ -43,7 +49,7 @@ def build(
         raise InputError(f"--up must be y, z or auto, got {up!r}")
     settings = NavMeshSettings(agent_radius=agent_radius, agent_height=agent_height, max_climb=max_climb,
                                max_slope=max_slope, cell_size=cell_size, cell_height=cell_height,
-                               region_min_size=region_min_size)
+                               region_min_size=region_min_size)  # fmt: skip
     loaded = _load_scene(scene, up, scale)
     start = time.perf_counter()
     nm, reused = None, False
@@ -57,9 +63,18 @@ def build(
     if nm is None:
         nm = NavMesh.build(loaded, settings)
         nm.save(out)
-    payload = {"out": str(out), "reused": reused, "seconds": round(time.perf_counter() - start, 3), **nm.info()}
-    emit("navmesh build", payload, as_json, lambda d: ("reused" if d["reused"] else "wrote") + f" {d['out']}\n"
-         + _render_info(d))
+    payload = {
+        "out": str(out),
+        "reused": reused,
+        "seconds": round(time.perf_counter() - start, 3),
+        **nm.info(),
+    }
+    emit(
+        "navmesh build",
+        payload,
+        as_json,
+        lambda d: ("reused" if d["reused"] else "wrote") + f" {d['out']}\n" + _render_info(d),
+    )
 
 
 def _load_scene(scene: str, up: str, scale: float | None) -> Any:
@@ -94,8 +109,10 @@ def _render_info(d: dict[str, Any]) -> str:
     lines += [f"  floor {f['index']}: z = {f['z']:.2f} m, {f['area']:.1f} m^2" for f in d["floors"]]
     lines.append(f"islands    {len(d['islands'])}")
     for isl in d["islands"][:15]:
-        lines.append(f"  island {isl['index']:3d}: {isl['area']:8.2f} m^2, floor {isl['floor']}, "
-                     f"z {isl['bounds_min'][2]:.2f}..{isl['bounds_max'][2]:.2f} m")
+        lines.append(
+            f"  island {isl['index']:3d}: {isl['area']:8.2f} m^2, floor {isl['floor']}, "
+            f"z {isl['bounds_min'][2]:.2f}..{isl['bounds_max'][2]:.2f} m"
+        )
     if len(d["islands"]) > 15:
         lines.append(f"  ... and {len(d['islands']) - 15} more")
     return "\n".join(lines)
@@ -112,28 +129,44 @@ def _query(file: Path, start: str, goal: str) -> tuple[Any, Any, Any]:
 
 
 @app.command("distance")
-def distance(file: Path = FileArg, start: str = FromOption, goal: str = ToOption, as_json: bool = JsonOption) -> None:
+def distance(
+    file: Path = FileArg, start: str = FromOption, goal: str = ToOption, as_json: bool = JsonOption
+) -> None:
     """Geodesic distance (m) from --from to --to; unreachable when no walkable path joins them."""
     nm, a, b = _query(file, start, goal)
     d = float(nm.geodesic_distance(a, b))
-    payload = {"from": a.tolist(), "to": b.tolist(), "reachable": math.isfinite(d),
-               "distance": round(d, 4) if math.isfinite(d) else None,
-               "euclidean": round(float(((a - b) ** 2).sum() ** 0.5), 4)}
-    emit("navmesh distance", payload, as_json,
-         lambda p: f"{p['distance']:.3f} m" if p["reachable"] else "unreachable")
+    payload = {
+        "from": a.tolist(),
+        "to": b.tolist(),
+        "reachable": math.isfinite(d),
+        "distance": round(d, 4) if math.isfinite(d) else None,
+        "euclidean": round(float(((a - b) ** 2).sum() ** 0.5), 4),
+    }
+    emit(
+        "navmesh distance",
+        payload,
+        as_json,
+        lambda p: f"{p['distance']:.3f} m" if p["reachable"] else "unreachable",
+    )
 
 
 @app.command("path")
-def path(file: Path = FileArg, start: str = FromOption, goal: str = ToOption,
-         as_json: bool = JsonOption) -> None:
+def path(
+    file: Path = FileArg, start: str = FromOption, goal: str = ToOption, as_json: bool = JsonOption
+) -> None:
     """Shortest path from --from to --to as a polyline of x,y,z points on the walkable surface."""
     import numpy as np
 
     nm, a, b = _query(file, start, goal)
     pts = nm.shortest_path(a, b)
     length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()) if len(pts) > 1 else 0.0
-    payload = {"from": a.tolist(), "to": b.tolist(), "reachable": bool(len(pts)),
-               "length": round(length, 4) if len(pts) else None, "points": np.round(pts, 4).tolist()}
+    payload = {
+        "from": a.tolist(),
+        "to": b.tolist(),
+        "reachable": bool(len(pts)),
+        "length": round(length, 4) if len(pts) else None,
+        "points": np.round(pts, 4).tolist(),
+    }
     emit("navmesh path", payload, as_json, _render_path)
 
 
@@ -167,8 +200,12 @@ def draw_map(
     if start is not None and goal is not None:
         pts = nm.shortest_path(np.array(parse_vec3(start, "--from")), np.array(parse_vec3(goal, "--to")))
     panels = render_map(nm, out, pts)
-    payload = {"out": str(out), "floors": panels, "islands": len(nm.islands),
-               "path_points": None if pts is None else len(pts)}
+    payload = {
+        "out": str(out),
+        "floors": panels,
+        "islands": len(nm.islands),
+        "path_points": None if pts is None else len(pts),
+    }
     emit("navmesh map", payload, as_json, lambda d: f"wrote {d['out']}: {d['floors']} floor panel(s)")
 
 
@@ -188,5 +225,9 @@ def export(
     nm = NavMesh.load(file)
     counts = export_surface(nm, out, fmt, up="y" if fmt == "glb" else "z")
     payload = {"out": str(out), "format": fmt, **counts}
-    emit("navmesh export", payload, as_json,
-         lambda d: f"wrote {d['out']}: {d['triangles']:,} triangles, {d['area']:.2f} m^2")
+    emit(
+        "navmesh export",
+        payload,
+        as_json,
+        lambda d: f"wrote {d['out']}: {d['triangles']:,} triangles, {d['area']:.2f} m^2",
+    )

@@ -1,7 +1,8 @@
 """Habitat PointNav-v1 export and import.
 
 Layout: `OUT/<task>_n<N>/<split>/<split>.json.gz`, one Habitat data set per (task, agent count), plus
-`OUT/main_bench_manifest.json` (a copy of the source manifest, used by the import). PointNav episodes are
+`OUT/main_bench_manifest.json` (the source manifest plus each shard's sampling report, used by the import, which
+so rebuilds the data set byte for byte). PointNav episodes are
 single-agent, so each N-agent episode becomes N Habitat episodes with ids `<episode_id>/agent_<i>`, in order,
 and `info.main_bench` holds the multi-agent episode id, the agent index and what PointNav has no field for.
 
@@ -101,7 +102,11 @@ def export_habitat(dataset: str | Path, out: str | Path) -> list[Path]:
         data = json.dumps({"episodes": episodes}, separators=(",", ":")).encode()
         atomic_write_bytes(path, gzip.compress(data, mtime=0))
         written.append(path)
-    atomic_write_bytes(out / SIDECAR, (Path(dataset) / MANIFEST_NAME).read_bytes())
+    from .shards import shard_report
+
+    side = read_json(Path(dataset) / MANIFEST_NAME, what="episode data set manifest")
+    side["shard_reports"] = {s.path: shard_report(Path(dataset) / s.path)[1] for s in manifest.shards}
+    atomic_write_json(out / SIDECAR, side)
     return written
 
 
@@ -146,9 +151,12 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
         eps = by_shard.get(shard["path"], {})
         table = _shard_table(eps, shard, settings)
         path = out / shard["path"]
-        write_shard(table, path, {"requested": shard["requested"], "produced": table.num_rows,
-                                  "reason": "imported from a Habitat export", "rejections": {}})
-        entries.append({**shard, "rows": table.num_rows, "sha256": sha256_file(path)})
+        report = doc.get("shard_reports", {}).get(shard["path"]) or {
+            "requested": shard["requested"], "produced": table.num_rows, "reason": "imported from a Habitat export",
+            "rejections": {}}
+        write_shard(table, path, report)
+        entries.append({**shard, "rows": table.num_rows, "sha256": sha256_file(path),
+                        "reason": report.get("reason", ""), "rejections": report.get("rejections", {})})
     missing = set(by_shard) - {s["path"] for s in doc["shards"]}
     if missing:
         raise DatasetError(f"episodes of shards the manifest does not list: {sorted(missing)[:3]}", path=src)

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.parquet as pq
 
 from .goals import target_field
 from .plan import stable_id
@@ -23,9 +24,10 @@ def _pick(total: int, sample: int | None, seed: int) -> np.ndarray:
     return np.sort(rng.choice(total, size=sample, replace=False))
 
 
-def recheck_distances(manifest: Manifest, tables: list[tuple[ShardEntry, pa.Table]], report: ValidationReport,
+def recheck_distances(manifest: Manifest, shards: list[tuple[ShardEntry, int]], report: ValidationReport,
                       *, sample: int | None = None, cache_dir: str | Path | None = None) -> None:
-    """Recompute the geodesic distance of every agent of every (or `sample` random) episode; add problems
+    """Recompute the geodesic distance of every agent of every (or `sample` random) episode of `shards`
+    [(shard, rows), ...], re-reading only the shards that hold picked episodes; add problems
     where |recomputed - stored| > 1% + 1 cm. Fields are built once per (scene, target).
 
     `cache_dir`: the cache root as for generation (built-in houses in it, navmeshes in `cache_dir/navmesh`);
@@ -36,16 +38,17 @@ def recheck_distances(manifest: Manifest, tables: list[tuple[ShardEntry, pa.Tabl
     from .dataset import resolve_scene
     from .validate import RECHECK_ABS, RECHECK_REL
 
-    sizes = [table.num_rows for _, table in tables]
+    sizes = [rows for _, rows in shards]
     picked = _pick(sum(sizes), sample, manifest.seed)
     offsets = np.cumsum([0] + sizes)
     rows = []  # (scene_id, shard, row dict) of the picked episodes only: a sample never converts the whole set
-    for k, (entry, table) in enumerate(tables):
+    for k, (entry, _) in enumerate(shards):
         local = picked[(picked >= offsets[k]) & (picked < offsets[k + 1])] - offsets[k]
         if len(local) == 0:
             continue
-        part = table.select(["episode_id", "start_positions", "target_instance_ids", "target_positions",
-                             "geodesic_distances"]).take(pa.array(local))
+        part = pq.read_table(manifest.root / entry.path, columns=[
+            "episode_id", "start_positions", "target_instance_ids", "target_positions", "geodesic_distances",
+        ]).take(pa.array(local))
         rows += [(entry.scene_id, entry.path, r) for r in part.to_pylist()]
     by_scene: dict[str, list[int]] = {}
     for i, row in enumerate(rows):

@@ -188,10 +188,17 @@ def validate_dataset(dataset: str | Path, *, recheck: bool = False, sample: int 
         raise InputError("episode data set not found", path=root)
     manifest = read_manifest(root)
     report = ValidationReport(dataset=root)
+    # One shard in memory at a time; ids are kept per (scene, task, N) only: an id of another group fails the
+    # id-prefix check of `check_rows`, so duplicates can only hide inside a group.
+    ordered = sorted(manifest.shards, key=lambda e: (e.scene_id, e.task, e.agents, e.shard, e.path))
+    readable: list[tuple[ShardEntry, int]] = []
+    group: tuple | None = None
     ids: list[str] = []
     shard_of: list[str] = []
-    tables = []
-    for entry in manifest.shards:
+    for entry in ordered:
+        if (entry.scene_id, entry.task, entry.agents) != group:
+            check_duplicates(ids, shard_of, report)
+            group, ids, shard_of = (entry.scene_id, entry.task, entry.agents), [], []
         report.shards += 1
         table = check_shard_file(root, entry, report)
         if table is None:
@@ -201,11 +208,11 @@ def validate_dataset(dataset: str | Path, *, recheck: bool = False, sample: int 
         col = table.column("episode_id").to_pylist()
         ids += col
         shard_of += [entry.path] * len(col)
-        tables.append((entry, table))
+        readable.append((entry, table.num_rows))
     check_duplicates(ids, shard_of, report)
     check_stray_files(root, manifest, report)
     if recheck:
         from .recheck import recheck_distances
 
-        recheck_distances(manifest, tables, report, sample=sample, cache_dir=cache_dir)
+        recheck_distances(manifest, readable, report, sample=sample, cache_dir=cache_dir)
     return report

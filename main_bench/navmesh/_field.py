@@ -156,7 +156,8 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats=np.zeros(4, 
             d = np.sqrt(dh * dh + dz * dz)
             if d >= g[v] or dh <= 1e-9:
                 continue
-            if not _line_of_sight(v, u, tpos[j, 0], tpos[j, 1], tpos[j, 2], nbr, px, py, pz, cs, ztol, cx, cy):
+            tx, ty, tz = tpos[j, 0], tpos[j, 1], tpos[j, 2]
+            if not _line_of_sight(v, u, tx, ty, tz, nbr, px, py, pz, cs, ztol, cx, cy):
                 continue
             g[v] = d
             anchor[v] = n + j

@@ -54,7 +54,8 @@ def _rect_dist(px, py, r):
 
 
 @njit(cache=True)
-def blocking_rects(nbr, ix, iy, z, nx, ny, span_start, szlo, szhi, srect, x0, y0, cs, max_climb, agent_height):
+def blocking_rects(nbr, ix, iy, z, nx, ny, span_start, szlo, szhi, srect, x0, y0, cs, max_climb,
+                   agent_height):
     """(N, 8, 4) what stops each node's missing links, as rectangles in cell units (x0, y0, x1, y1).
 
     The rectangle is the extent, within the neighbour column, of the geometry that blocks the agent's body
@@ -85,7 +86,7 @@ def blocking_rects(nbr, ix, iy, z, nx, ny, span_start, szlo, szhi, srect, x0, y0
                         by1 = max(by1, (srect[k, 3] - y0) / cs)
             if bx0 > bx1:
                 if d >= 4 and (nbr[u, d - 4] < 0 or nbr[u, (d - 3) % 4] < 0):
-                    continue  # a diagonal cut off by a blocked side: that side's geometry counts, not this cell
+                    continue  # cut off by a blocked side: that side's geometry counts, not this cell
                 bx0, by0, bx1, by1 = float(jx), float(jy), float(jx + 1), float(jy + 1)
             out[u, d, 0] = bx0
             out[u, d, 1] = by0

@@ -34,8 +34,9 @@ class Coverage:
         return {k: round(float(v), 4) for k, v in self.__dict__.items()}
 
 
-def coverage_overlap(navmesh: NavMesh, ref_vertices: np.ndarray, ref_faces: np.ndarray,
-                     z_tolerance: float = 0.3) -> Coverage:
+def coverage_overlap(
+    navmesh: NavMesh, ref_vertices: np.ndarray, ref_faces: np.ndarray, z_tolerance: float = 0.3
+) -> Coverage:
     """Coverage of `navmesh` against a reference walkable mesh (canonical frame, metres).
 
     Both are put on the navmesh's grid; a cell of one matches when the other has a surface in the same column
@@ -44,7 +45,9 @@ def coverage_overlap(navmesh: NavMesh, ref_vertices: np.ndarray, ref_faces: np.n
     x0, y0, cs, nx, ny = navmesh.grid_shape()
     v = np.ascontiguousarray(ref_vertices, dtype=np.float64)
     f = np.ascontiguousarray(ref_faces, dtype=np.int64)
-    col, zlo, zhi, kind, _ = _raster.rasterize(v, f, x0, y0, cs, nx, ny, np.cos(np.radians(REFERENCE_MAX_SLOPE)))
+    col, zlo, zhi, kind, _ = _raster.rasterize(
+        v, f, x0, y0, cs, nx, ny, np.cos(np.radians(REFERENCE_MAX_SLOPE))
+    )
     keep = kind == 1
     ref_col, ref_z = _levels(col[keep], 0.5 * (zlo[keep] + zhi[keep]), z_tolerance)
     ix, iy = navmesh.cell_indices()
@@ -54,10 +57,14 @@ def coverage_overlap(navmesh: NavMesh, ref_vertices: np.ndarray, ref_faces: np.n
     ref_hit = _matched(ref_col, ref_z, our_col, our_z, z_tolerance)
     inter = 0.5 * (ours_hit.sum() + ref_hit.sum())
     union = len(our_z) + len(ref_z) - inter
-    return Coverage(navmesh_area=len(our_z) * cs * cs, reference_area=len(ref_z) * cs * cs,
-                    precision=float(ours_hit.mean()) if len(our_z) else 0.0,
-                    recall=float(ref_hit.mean()) if len(ref_z) else 0.0,
-                    iou=float(inter / union) if union else 0.0, z_tolerance=z_tolerance)
+    return Coverage(
+        navmesh_area=len(our_z) * cs * cs,
+        reference_area=len(ref_z) * cs * cs,
+        precision=float(ours_hit.mean()) if len(our_z) else 0.0,
+        recall=float(ref_hit.mean()) if len(ref_z) else 0.0,
+        iou=float(inter / union) if union else 0.0,
+        z_tolerance=z_tolerance,
+    )
 
 
 def _levels(col: np.ndarray, z: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
@@ -69,7 +76,9 @@ def _levels(col: np.ndarray, z: np.ndarray, tol: float) -> tuple[np.ndarray, np.
     return col[new], z[new]
 
 
-def _matched(col: np.ndarray, z: np.ndarray, other_col: np.ndarray, other_z: np.ndarray, tol: float) -> np.ndarray:
+def _matched(
+    col: np.ndarray, z: np.ndarray, other_col: np.ndarray, other_z: np.ndarray, tol: float
+) -> np.ndarray:
     """(N,) bool: the other surface has a cell in the same column within tol in height."""
     hit = np.zeros(len(col), bool)
     if not len(other_col):

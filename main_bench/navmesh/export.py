@@ -14,8 +14,8 @@ EXPORT_FORMATS = ("obj", "glb")
 
 
 def surface_mesh(nm: NavMesh) -> tuple[np.ndarray, np.ndarray]:
-    """(V, 3) vertices and (F, 3) faces: one horizontal square (two triangles) per navigable cell at its surface
-    height, canonical frame (+Z up, metres)."""
+    """(V, 3) vertices and (F, 3) faces: one horizontal square (two triangles) per navigable cell at its
+    surface height, canonical frame (+Z up, metres)."""
     x0, y0, cs, _, _ = nm.grid_shape()
     ix, iy = nm.cell_indices()
     z = nm.cells()[:, 2]
@@ -45,8 +45,11 @@ def export_surface(nm: NavMesh, out: str | Path, fmt: str, up: str = "z") -> dic
     data = mesh.export(file_type=fmt)
     with atomic_path(out, suffix=f".{fmt}") as tmp:
         tmp.write_bytes(data if isinstance(data, bytes) else data.encode())
-    return {"vertices": int(len(mesh.vertices)), "triangles": int(len(mesh.faces)),
-            "area": round(float(nm.navigable_area), 4)}
+    return {
+        "vertices": int(len(mesh.vertices)),
+        "triangles": int(len(mesh.faces)),
+        "area": round(float(nm.navigable_area), 4),
+    }
 
 
 def render_map(nm: NavMesh, out: str | Path, path: np.ndarray | None = None, dpi: int = 100) -> int:

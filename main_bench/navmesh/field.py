@@ -66,8 +66,8 @@ class DistanceField:
         nm = self.navmesh
         g = nm._grid
         nodes = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
-        d = _field.lookup(pts, nodes, self._g, self._anchor, self._root, nm._ax, nm._ay, g.zs, g.z, self._tpos,
-                          self._tpos_surface, g.x0, g.y0, g.cell_size, g.ix, g.iy)
+        d = _field.lookup(pts, nodes, self._g, self._anchor, self._root, nm._ax, nm._ay, g.zs, g.z,
+                          self._tpos, self._tpos_surface, g.x0, g.y0, g.cell_size, g.ix, g.iy)
         return float(d[0]) if single else d
 
     def path(self, point: np.ndarray) -> np.ndarray:
@@ -91,7 +91,36 @@ class DistanceField:
             out.append(np.array([nm._ax[a], nm._ay[a], g.z[a]]))
             a = int(self._anchor[a])
         out.append(self._tpos_surface[a - n])
-        return _dedupe(np.array(out))
+        return _keep_on_navmesh(nm, _dedupe(np.array(out)), int(g.island[node]))
+
+
+def _keep_on_navmesh(nm: NavMesh, path: np.ndarray, island: int, rounds: int = 4) -> np.ndarray:
+    """Insert waypoints where a segment grazes a cell that is not navigable.
+
+    Distances run through points on the agent-radius contour; a straight segment between two of them can clip
+    the corner of a dropped cell by a few millimetres. Each such place gets the nearest navigable point as an
+    extra waypoint (the length changes by far less than a millimetre).
+    """
+    step = 0.125 * nm.cell_size
+    for _ in range(rounds):
+        out = [path[0]]
+        changed = False
+        for p, q in zip(path[:-1], path[1:], strict=True):
+            k = max(2, int(np.linalg.norm(q[:2] - p[:2]) / step) + 2)
+            t = np.linspace(0.0, 1.0, k)[1:-1, None]
+            dense = p + t * (q - p)
+            if len(dense):
+                bad = np.flatnonzero(~nm.is_navigable(dense))
+                if len(bad):
+                    fix = nm.snap(dense[bad[len(bad) // 2]], island=island)[0]
+                    if np.isfinite(fix).all():
+                        out.append(fix)
+                        changed = True
+            out.append(q)
+        path = _dedupe(np.array(out))
+        if not changed:
+            break
+    return path
 
 
 def _dedupe(path: np.ndarray) -> np.ndarray:

@@ -87,7 +87,7 @@ class NavMesh:
         cs = grid.cell_size
         self._px = grid.x0 + (grid.ix + 0.5) * cs
         self._py = grid.y0 + (grid.iy + 0.5) * cs
-        # the points distances are measured through: cell centres, moved onto the agent_radius contour near walls
+        # points distances are measured through: cell centres, moved onto the agent_radius contour near walls
         self._ax = self._px + (grid.ox if grid.ox is not None else 0.0)
         self._ay = self._py + (grid.oy if grid.oy is not None else 0.0)
         self._below = settings.max_climb + _ABOVE_EXTRA
@@ -113,9 +113,10 @@ class NavMesh:
         """Build from a triangle soup already in the canonical frame (+Z up, metres): (V, 3) and (F, 3)."""
         vertices = np.asarray(vertices, dtype=np.float64)
         faces = np.asarray(faces, dtype=np.int64)
-        if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3 or not len(faces):
-            raise NavMeshError(f"need (V, 3) vertices and a non-empty (F, 3) faces array, got {vertices.shape} "
-                               f"and {faces.shape}")
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3 \
+                or not len(faces):
+            raise NavMeshError(f"need (V, 3) vertices and a non-empty (F, 3) faces array, got "
+                               f"{vertices.shape} and {faces.shape}")
         gh = geometry_hash(vertices, faces)
         return cls(build_grid(vertices, faces, settings), settings, scene_id, gh, gh)
 

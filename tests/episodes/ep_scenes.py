@@ -80,3 +80,23 @@ def dataset_bytes(root: Path) -> dict[str, bytes]:
     """Every shard file and the manifest of a data set, by relative path."""
     files = sorted(root.glob("split=*/task=*/agents=*/*.parquet")) + [root / "manifest.json"]
     return {f.relative_to(root).as_posix(): f.read_bytes() for f in files}
+
+
+def staircase(path: Path, steps: int = 20, rise: float = 3.0) -> Path:
+    """A 2 m wide corridor: lower landing z = 0 for x in [0, 4], `steps` steps up to z = `rise` over x in
+    [4, 8], upper landing z = `rise` for x in [8, 12] on a solid block: two floors joined by the stair."""
+    t, w, h = WALL_T, 2.0, WALL_H
+    run = 4.0 / steps
+    meshes = [_box((-t, -t, -0.1), (4.0, w + t, 0.0)), _box((8.0, -t, -0.1), (12.0 + t, w + t, rise))]
+    meshes += [_box((4.0 + i * run, 0.0, -0.1), (4.0 + (i + 1) * run, w, (i + 1) * rise / steps))
+               for i in range(steps)]
+    meshes += [_box((-t, -t, 0.0), (0.0, w + t, h)), _box((12.0, -t, rise), (12.0 + t, w + t, rise + h))]
+    meshes += [_box((-t, y0, 0.0), (12.0 + t, y1, rise + h)) for y0, y1 in ((-t, 0.0), (w, w + t))]
+    return write_scene(path, meshes)
+
+
+def unfolded_x(x: np.ndarray, steps: int = 20, rise: float = 3.0) -> np.ndarray:
+    """Along-corridor length coordinate of `staircase` with the stair laid flat as the ramp through its treads."""
+    a = 4.0 - 0.5 * 4.0 / steps
+    stretch = np.hypot(4.0, rise) / 4.0
+    return np.where(x <= a, x, np.where(x <= a + 4.0, a + (x - a) * stretch, a + 4.0 * stretch + (x - a - 4.0)))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ep_scenes import box_room, furnished_room, l_corridor, room_meshes, write_scene
+from ep_scenes import box_room, furnished_room, l_corridor, room_meshes, staircase, unfolded_x, write_scene
 
 from main_bench.episodes.goals import footprint_distance, goal_points, target_field
 from main_bench.episodes.sampler import sample_episodes
@@ -160,3 +160,22 @@ def test_ratio_thinning_removes_near_straight_agents(tmp_path):
     # Most pairs in the corridor see each other straight; Habitat's rule keeps few of those.
     low_off, low_on = (ratios[0.0] < 1.1).mean(), (ratios[1.1] < 1.1).mean()
     assert low_off > 0.5 and low_on < low_off / 2, (low_off, low_on)
+
+
+def test_floors_same_by_default_and_cross_floor_on_request(tmp_path):
+    path = staircase(tmp_path / "stairs.obj")
+    crossing = {}
+    for cross in (False, True):
+        settings = GenerationSettings(ratio_threshold=0.0, cross_floor=cross, point_goal_episodes=4)
+        bank = _bank(path, settings)
+        assert [round(f.z, 1) for f in bank.navmesh.floors] == [0.0, 3.0]
+        batch, report = sample_episodes(bank, settings, "shared", 2, 200, np.random.default_rng(5), SEP)
+        assert len(batch) == 200, report.to_json()
+        _check_common(batch, settings, 2)
+        crossing[cross] = (batch.start_floors != batch.target_floors).mean()
+        # Independent length: the corridor unfolded with the stair laid flat (the navmesh walks the treads).
+        s, g = batch.starts.reshape(-1, 3), batch.target_positions.reshape(-1, 3)
+        unfolded = np.hypot(unfolded_x(s[:, 0]) - unfolded_x(g[:, 0]), s[:, 1] - g[:, 1])
+        geo = batch.geodesic.reshape(-1)
+        assert np.all(geo >= unfolded * 0.97 - 0.05) and np.all(geo <= unfolded * 1.1 + 0.05)
+    assert crossing[False] == 0.0 and crossing[True] > 0.2

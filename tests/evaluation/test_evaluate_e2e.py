@@ -208,3 +208,11 @@ def test_same_settings_replace_is_the_same_identity(tiny_dataset, tmp_path):
     base = _settings(tiny_dataset, tmp_path / "a")
     assert replace(base, workers=4, executor="ray").identity() == base.identity()
     assert replace(base, seed=1).identity() != base.identity()
+
+
+def test_ray_executor_gives_the_same_files(reference, tiny_dataset, tmp_path):
+    out = tmp_path / "ray"
+    outcome = evaluate(_settings(tiny_dataset, out, executor="ray", workers=2))
+    assert outcome.chunks_run == 4 and outcome.episodes_run == 8
+    for kind in ("records", "trajectories"):
+        pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))

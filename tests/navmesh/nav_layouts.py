@@ -3,8 +3,8 @@
 A flat layout is a rectangular room (walls outside it) with axis-aligned rectangular obstacles inside. For an
 agent of radius r the free space is the room shrunk by r minus each obstacle grown by r (rounded corners), and
 the exact shortest path is found on a visibility graph of points on those rounded corners (polygons that
-circumscribe the arcs, so lengths are exact to about 1e-4 relative). The staircase is a straight corridor whose
-shortest paths are straight lines once the stair ramp is unfolded into the floor plane.
+circumscribe the arcs, so lengths are exact to about 1e-4 relative). The staircase is a straight corridor
+whose shortest paths are straight lines once the stair ramp is unfolded into the floor plane.
 """
 
 from __future__ import annotations
@@ -45,9 +45,13 @@ class FlatLayout:
         """Vertices and faces: floor slab, four walls, obstacles as tall boxes."""
         x0, y0, x1, y1 = self.room
         w, h = WALL, WALL_HEIGHT
-        boxes = [(x0 - w, y0 - w, -SLAB, x1 + w, y1 + w, 0.0),
-                 (x0 - w, y0 - w, 0.0, x0, y1 + w, h), (x1, y0 - w, 0.0, x1 + w, y1 + w, h),
-                 (x0, y0 - w, 0.0, x1, y0, h), (x0, y1, 0.0, x1, y1 + w, h)]
+        boxes = [
+            (x0 - w, y0 - w, -SLAB, x1 + w, y1 + w, 0.0),
+            (x0 - w, y0 - w, 0.0, x0, y1 + w, h),
+            (x1, y0 - w, 0.0, x1 + w, y1 + w, h),
+            (x0, y0 - w, 0.0, x1, y0, h),
+            (x0, y1, 0.0, x1, y1 + w, h),
+        ]
         boxes += [(a, b, 0.0, c, d, h) for a, b, c, d in self.obstacles]
         return boxes_mesh(boxes)
 
@@ -67,7 +71,9 @@ class FlatLayout:
         ii, jj = np.triu_indices(m, 1)
         ok = self._visible(pts[ii], pts[jj], r)
         w = np.linalg.norm(pts[ii] - pts[jj], axis=1)
-        graph = csr_matrix((np.r_[w[ok], w[ok]], (np.r_[ii[ok], jj[ok]], np.r_[jj[ok], ii[ok]])), shape=(m, m))
+        graph = csr_matrix(
+            (np.r_[w[ok], w[ok]], (np.r_[ii[ok], jj[ok]], np.r_[jj[ok], ii[ok]])), shape=(m, m)
+        )
         dist = dijkstra(graph, indices=m - 1)
         src = sources[:, :2]
         best = np.full(len(src), np.inf)
@@ -170,12 +176,14 @@ class Staircase:
         top = self.rise
         step_run = self.run / self.steps
         step_rise = self.rise / self.steps
-        boxes = [(-t, -t, -SLAB, 4.0, w + t, 0.0),            # lower landing
-                 (8.0, -t, top - SLAB, 12.0 + t, w + t, top),  # upper landing (its slab is the room's ceiling)
-                 (8.0, -t, -SLAB, 12.0 + t, w + t, 0.0),       # the closed room's floor
-                 (-t, -t, 0.0, 0.0, w + t, h),                  # end wall, lower
-                 (12.0, -t, 0.0, 12.0 + t, w + t, top + h),     # end wall, upper
-                 (8.0 - t, 0.0, 0.0, 8.0, w, top - SLAB)]       # the closed room's wall under the stair top
+        boxes = [
+            (-t, -t, -SLAB, 4.0, w + t, 0.0),  # lower landing
+            (8.0, -t, top - SLAB, 12.0 + t, w + t, top),  # upper landing (its slab is the room's ceiling)
+            (8.0, -t, -SLAB, 12.0 + t, w + t, 0.0),  # the closed room's floor
+            (-t, -t, 0.0, 0.0, w + t, h),  # end wall, lower
+            (12.0, -t, 0.0, 12.0 + t, w + t, top + h),  # end wall, upper
+            (8.0 - t, 0.0, 0.0, 8.0, w, top - SLAB),
+        ]  # the closed room's wall under the stair top
         for i in range(self.steps):
             xa = 4.0 + i * step_run
             boxes.append((xa, 0.0, -SLAB, xa + step_run, w, (i + 1) * step_rise))
@@ -191,7 +199,7 @@ class Staircase:
         return np.where(x <= a, x, np.where(x <= b, a + (x - a) * stretch, a + self.run * stretch + (x - b)))
 
     def exact_distances(self, sources: np.ndarray, target: np.ndarray, r: float) -> np.ndarray:
-        """(N,) exact lengths for sources and target in the corridor (landings), radius r (free space convex)."""
+        """(N,) exact lengths for sources and target on the landings, radius r (the free space is convex)."""
         del r
         dx = self._unfold(sources[:, 0]) - self._unfold(np.array([target[0]]))[0]
         return np.hypot(dx, sources[:, 1] - target[1])
@@ -201,8 +209,10 @@ class Staircase:
         return np.minimum.reduce([p[:, 1], self.width - p[:, 1], p[:, 0], 12.0 - p[:, 0]])
 
 
-def accuracy_report(offsets=((0.0, 0.0), (0.013, 0.031), (0.037, 0.004), (0.025, 0.025)), seed: int = 1) -> list[dict]:
-    """Relative error of navmesh geodesics against the exact lengths, per layout and grid offset (paths >= 2 m).
+def accuracy_report(
+    offsets=((0.0, 0.0), (0.013, 0.031), (0.037, 0.004), (0.025, 0.025)), seed: int = 1
+) -> list[dict]:
+    """Relative error of navmesh geodesics against exact lengths, per layout and grid offset (paths >= 2 m).
 
     Run `python tests/navmesh/nav_layouts.py` to print it (the figures of docs/navmesh.md).
     """
@@ -229,12 +239,23 @@ def accuracy_report(offsets=((0.0, 0.0), (0.013, 0.031), (0.037, 0.004), (0.025,
                 rel.append((got[long] - exact[long]) / exact[long])
                 below.append(got - np.linalg.norm(pts[8:] - t, axis=1))
             r = np.concatenate(rel)
-            rows.append({"layout": layout.name, "offset": off, "pairs": len(r), "max_abs": float(np.abs(r).max()),
-                         "mean_abs": float(np.abs(r).mean()), "most_below_straight_m": float(-np.concatenate(below).min())})
+            rows.append(
+                {
+                    "layout": layout.name,
+                    "offset": off,
+                    "pairs": len(r),
+                    "max_abs": float(np.abs(r).max()),
+                    "mean_abs": float(np.abs(r).mean()),
+                    "most_below_straight_m": float(-np.concatenate(below).min()),
+                }
+            )
     return rows
 
 
 if __name__ == "__main__":
     for row in accuracy_report():
-        print(f"{row['layout']:15s} offset {row['offset']}: {row['pairs']:5d} pairs, max {100 * row['max_abs']:.2f}%, "
-              f"mean {100 * row['mean_abs']:.3f}%, below straight line by at most {row['most_below_straight_m']:.4f} m")
+        print(
+            f"{row['layout']:15s} offset {row['offset']}: {row['pairs']:5d} pairs, "
+            f"max {100 * row['max_abs']:.2f}%, mean {100 * row['mean_abs']:.3f}%, "
+            f"below straight line by at most {row['most_below_straight_m']:.4f} m"
+        )

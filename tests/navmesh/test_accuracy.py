@@ -11,7 +11,7 @@ from main_bench.navmesh import NavMesh, NavMeshSettings
 SETTINGS = NavMeshSettings()
 R = SETTINGS.agent_radius
 #: Layouts shifted off the cell grid too, so walls do not all fall on cell boundaries.
-OFFSETS = ((0.0, 0.0), (0.013, 0.031), (0.025, 0.025))
+OFFSETS = ((0.0, 0.0), (0.013, 0.031), (0.025, 0.025), (0.0053, 0.0239))
 LAYOUTS = (*FLAT_LAYOUTS, Staircase())
 
 
@@ -32,12 +32,11 @@ def _points(layout, nm, shift, n, seed):
     return pts[ok]
 
 
-#: Known gap (docs/navmesh.md): walls whose corners fall on cell centres put paths through a door up to 1.6%
-#: too long (mean still under 0.1%). Strict, so that fixing it makes this test say so.
-KNOWN_GAP = pytest.mark.xfail(strict=True, reason="door jambs on cell centres: up to 1.6% too long")
-CASES = [pytest.param(lay, off, id=f"{lay.name}-{name}",
-                      marks=[KNOWN_GAP] if (lay.name, name) == ("two_rooms_door", "half_cell") else [])
-         for lay in LAYOUTS for off, name in zip(OFFSETS, ("aligned", "offset", "half_cell"), strict=True)]
+CASES = [
+    pytest.param(lay, off, id=f"{lay.name}-{name}")
+    for lay in LAYOUTS
+    for off, name in zip(OFFSETS, ("aligned", "offset", "half_cell", "offset2"), strict=True)
+]
 
 
 @pytest.mark.parametrize(("layout", "offset"), CASES)
@@ -74,8 +73,10 @@ def test_shortest_path_on_navmesh_and_as_long_as_distance(layout):
         assert np.linalg.norm(path[0, :2] - a[:2]) < 0.05 and np.linalg.norm(path[-1, :2] - b[:2]) < 0.05
         length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
         assert abs(length - d) <= 0.01 * d, (length, d)
-        steps = [np.linspace(p, q, max(2, int(np.linalg.norm(q - p) / 0.02) + 1)) for p, q in zip(path[:-1], path[1:],
-                                                                                                   strict=True)]
+        steps = [
+            np.linspace(p, q, max(2, int(np.linalg.norm(q - p) / 0.02) + 1))
+            for p, q in zip(path[:-1], path[1:], strict=True)
+        ]
         dense = np.concatenate(steps)
         assert nm.is_navigable(dense).all()
         checked += 1

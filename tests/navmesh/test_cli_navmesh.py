@@ -46,8 +46,9 @@ def test_build_writes_and_reuses(cli, scene_file, built):
     assert doc["navigable_area"] == pytest.approx(NavMesh.load(out).navigable_area, abs=1e-3)
     again = json.loads(cli("navmesh", "build", scene_file, "--up", "z", "--out", out, "--json").out)
     assert again["reused"] is True
-    wider = json.loads(cli("navmesh", "build", scene_file, "--up", "z", "--out", out, "--agent-radius", "0.3",
-                           "--json").out)
+    wider = json.loads(
+        cli("navmesh", "build", scene_file, "--up", "z", "--out", out, "--agent-radius", "0.3", "--json").out
+    )
     assert wider["reused"] is False and wider["navigable_area"] < doc["navigable_area"]
     r = cli("navmesh", "build", scene_file, "--up", "z", "--out", out)
     assert r.code == 0 and "wrote" in r.out and "islands" in r.out
@@ -81,7 +82,11 @@ def test_distance_and_path(cli, built):
     d = json.loads(cli("navmesh", "distance", out, "--from", A, "--to", B, "--json").out)
     nm = NavMesh.load(out)
     expected = nm.geodesic_distance(np.array([1.0, 1, 0]), np.array([8.0, 1, 0]))
-    assert d["reachable"] and d["distance"] == pytest.approx(expected, abs=1e-3) and d["distance"] > d["euclidean"]
+    assert (
+        d["reachable"]
+        and d["distance"] == pytest.approx(expected, abs=1e-3)
+        and d["distance"] > d["euclidean"]
+    )
     p = json.loads(cli("navmesh", "path", out, "--from", A, "--to", B, "--json").out)
     assert p["reachable"] and len(p["points"]) >= 3
     assert p["length"] == pytest.approx(d["distance"], rel=0.01)

@@ -1,4 +1,4 @@
-"""The query API: islands, areas, floors, navigability, snapping, sampling, distances, fields, caching, errors."""
+"""Query API: islands, areas, floors, navigability, snapping, sampling, distances, fields, caching, errors."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ def test_islands_areas_and_floors(pillar):
     assert sum(i.area for i in nm.islands) == pytest.approx(nm.navigable_area)
     floor = nm.islands[0]
     # 6 x 5 m room less the pillar, shrunk by the agent radius (less the erosion slack of a cell or so)
-    assert 5.64 * 4.64 - 0.96 ** 2 <= floor.area <= 5.76 * 4.76 - 0.84 ** 2
+    assert 5.64 * 4.64 - 0.96**2 <= floor.area <= 5.76 * 4.76 - 0.84**2
     assert [f.index for f in nm.floors] == [0] and nm.floors[0].z == pytest.approx(0.0, abs=1e-6)
     assert nm.islands[1].bounds_min[2] == pytest.approx(2.5)
 

@@ -9,7 +9,7 @@ from main_bench.navmesh import NavMesh, NavMeshSettings
 from main_bench.navmesh.compare import coverage_overlap
 from main_bench.scenes import load_scene
 
-#: The reference navmesh of recast_nav_test.obj was made for the level scaled by 0.2 and moved up (+Y) by this.
+#: The reference navmesh of recast_nav_test.obj is for the level scaled by 0.2 and moved up (+Y) by this.
 REF_SCALE = 0.2
 REF_LIFT = 0.740358
 
@@ -35,7 +35,7 @@ def _storeys_joined(nm: NavMesh) -> list[int]:
 
 
 def _cross_floor_distance(nm: NavMesh, island: int) -> tuple[float, float]:
-    """Geodesic and straight-line distance between a cell on the island's lowest and one on its highest floor."""
+    """Geodesic and straight-line distance from a cell on the island's lowest floor to one on its highest."""
     cells = nm.cells()
     sel = nm.cell_island() == island
     floors = nm.cell_floor()

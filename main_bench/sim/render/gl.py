@@ -253,20 +253,20 @@ class GLRenderer:
                                             ("3f 4f1", "in_pos", "in_color"), camera, closed))
         textured = np.nonzero(~untextured)[0]
         if len(textured):
-            c = surf.corners[textured]
             layers = np.stack(surf.textures)
             self._tex = ctx.texture_array((TEXTURE_SIZE, TEXTURE_SIZE, len(layers)), 4, layers.tobytes())
             self._tex.build_mipmaps()
             self._tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
             self._tex.use(0)
             progs[1]["u_tex"].value = 0
-            t = textured
-            self._batches.append(_Batch(
-                ctx, progs[1], c, lambda o: _textured_records(c[o], lit[t][o], surf.uvs[t][o], surf.layer[t][o]),
-                ("3f 4f1 2f 1f", "in_pos", "in_color", "in_uv", "in_layer"), camera, closed=False))
+            c, col, uv, lay = (a[textured] for a in (surf.corners, lit, surf.uvs, surf.layer))
+            self._batches.append(_Batch(ctx, progs[1], c, lambda o: _textured_records(c[o], col[o], uv[o], lay[o]),
+                                        ("3f 4f1 2f 1f", "in_pos", "in_color", "in_uv", "in_layer"), camera,
+                                        closed=False))
         progs[2]["u_scale"].value = (agent_radius, agent_radius, agent_height)
-        self._cyl_vbo = ctx.buffer(_cylinder().tobytes())
-        self._cyl_vertices = len(_cylinder())
+        cylinder = _cylinder()
+        self._cyl_vbo = ctx.buffer(cylinder.tobytes())
+        self._cyl_vertices = len(cylinder)
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.front_face = "cw"
 
