@@ -125,7 +125,7 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
                          "imported (they carry the generation settings and scene hashes)", path=src)
     doc = read_json(side, what="main-bench Habitat export manifest")
     settings = GenerationSettings.from_json(doc["settings"])
-    ident = identity(settings, doc["navmesh_settings"], doc["scenes"])
+    ident = identity(settings, doc["navmesh_settings"], doc["scenes"], doc.get("navmesh_algorithm"))
     if out.exists() and any(out.iterdir()):
         if not overwrite:
             raise InputError("exists and is not empty; pass --overwrite or choose another --out", path=out)

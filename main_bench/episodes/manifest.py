@@ -84,10 +84,19 @@ class Manifest:
         return sum(s.rows for s in self.shards)
 
 
-def identity(settings: GenerationSettings, navmesh_settings: dict[str, Any], scenes: dict[str, dict]) -> dict:
-    """What must match for an existing (partial) data set to be resumed rather than refused."""
+def identity(settings: GenerationSettings, navmesh_settings: dict[str, Any], scenes: dict[str, dict],
+             navmesh_algorithm: int | None = None) -> dict:
+    """What must match for an existing (partial) data set to be resumed rather than refused.
+
+    `navmesh_algorithm`: the navmesh build's algorithm version the distances come from (default: this
+    toolkit's), recorded so that a changed navmesh is seen.
+    """
+    if navmesh_algorithm is None:
+        from ..navmesh.build import ALGORITHM_VERSION
+
+        navmesh_algorithm = int(ALGORITHM_VERSION)
     return {"schema_version": EPISODES_SCHEMA_VERSION, "settings": settings.to_json(),
-            "navmesh_settings": navmesh_settings, "scenes": scenes}
+            "navmesh_settings": navmesh_settings, "navmesh_algorithm": navmesh_algorithm, "scenes": scenes}
 
 
 def build_manifest(ident: dict, shards: list[dict]) -> dict:
