@@ -91,7 +91,7 @@ def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
 
     settings = GenerationSettings.from_json(spec["settings"])
     nav_settings = NavMeshSettings.from_json(spec["navmesh_settings"])
-    scene = load_scene(spec["scene_path"], up=spec["up"])
+    scene = load_scene(_scene_path(spec), up=spec["up"])
     if scene.content_hash != spec["scene_hash"]:
         raise DatasetError(f"scene {spec['scene_id']!r} changed since generation started (content hash "
                            f"{scene.content_hash[:12]} != {spec['scene_hash'][:12]}); start again with --overwrite",
@@ -111,6 +111,17 @@ def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
         write_shard(table, Path(spec["out"]) / s.rel_path, doc)
         made[s.rel_path] = {**doc, "rows": len(batch)}
     return made
+
+
+def _scene_path(spec: dict[str, Any]) -> Path:
+    """The unit's scene file; a built-in house missing on this node (a Ray worker elsewhere) is generated into
+    the node's default cache (the content hash check then proves it is the same house)."""
+    path = Path(spec["scene_path"])
+    if not path.is_file() and spec.get("source") == "builtin":
+        from ..scenes import builtin
+
+        path = Path(builtin.ensure_builtin_scenes([spec["scene_id"]], builtin.default_cache_dir())[spec["scene_id"]])
+    return path
 
 
 def _prepare_out(out: Path, ident: dict, overwrite: bool) -> None:
@@ -178,6 +189,7 @@ def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], o
     shards = plan_shards([(s.scene_id, s.split) for s in sources], settings)
     specs = [{"out": str(out), "scene_id": unit[0].scene_id, "scene_path": str(by_id[unit[0].scene_id].path),
               "scene_hash": by_id[unit[0].scene_id].content_hash, "up": by_id[unit[0].scene_id].up,
+              "source": by_id[unit[0].scene_id].source,
               "settings": settings.to_json(), "navmesh_settings": nav_json,
               "cache_dir": None if cache_dir is None else str(cache_dir),
               "shards": [asdict(s) for s in unit]} for unit in group_units(shards)]

@@ -5,9 +5,9 @@ The path is checked in sub-steps of at most SUBSTEP_M (much less than any wall: 
 between two checked positions, and the swept disc between two checks is covered to within 2 mm), then the
 last free fraction is refined by bisection to BISECT_TOL_M. At each checked position: the agent-agent limit
 (closed form, done first because it is cheapest), the floor under the centre within max_climb of the previous
-position (a vertical ray), the wall probe (no overlap beyond OVERLAP_TOL_M, or less than at the start, so an agent
-spawned touching a wall can still move away), and, when a navmesh is given and the start is on it, the
-navmesh. Moving agents see the others where they are now: agents move in index order within a step.
+position (a vertical ray), the wall probe (no overlap beyond OVERLAP_TOL_M, or no more than at the start plus
+SLIDE_TOL_M, so an agent the navmesh placed a little into a wall can still slide along it or move away, never
+deeper), and, when a navmesh is given and the start is on it, the navmesh. Moving agents see the others where they are now: agents move in index order within a step.
 """
 
 from __future__ import annotations
@@ -24,8 +24,12 @@ SUBSTEP_M = 0.05
 #: Precision of the free distance found by bisection, metres.
 BISECT_TOL_M = 0.002
 #: Overlap with the scene (metres) always tolerated (contact noise); beyond it a position is only accepted
-#: when it overlaps less than the start of the move did (an agent placed in a wall may only move out).
+#: when it overlaps no more than the start of the move did, plus SLIDE_TOL_M.
 OVERLAP_TOL_M = 0.001
+#: Growth of an existing overlap a move may make (contact noise while sliding along a wall). The navmesh keeps
+#: cells down to agent_radius - cell_size / 2 from walls, so starts may overlap a wall by a few centimetres;
+#: at 0.1 mm a move, 500 steps cannot creep more than 5 cm deeper.
+SLIDE_TOL_M = 0.0001
 
 
 @dataclass(frozen=True)
@@ -88,7 +92,7 @@ class ForwardMover:
             if overlap > OVERLAP_TOL_M:
                 if not start_overlap:
                     start_overlap.append(self.world.penetration(feet))
-                if overlap >= start_overlap[0]:
+                if overlap > start_overlap[0] + SLIDE_TOL_M:
                     return None
             if use_nav and not self._on_navmesh(p):
                 return None

@@ -44,6 +44,7 @@ def test_generate_with_every_option(gen, tmp_path, ep_scenes):
     assert (s.min_distance, s.max_distance, s.success_distance, s.start_margin, s.ratio_threshold,
             s.goal_radius) == (1.5, 8.0, 0.5, 0.2, 0.0, 0.6)
     assert m.navmesh_settings["agent_radius"] == 0.2 and m.seed == 7
+    assert isinstance(json.loads((out / "manifest.json").read_text())["navmesh_algorithm"], int)
     assert {k: (e.split, e.source) for k, e in m.scenes.items()} == {"box": ("val", "path"), "furn": ("test", "path")}
     assert all(len(e.hash) == 64 for e in m.scenes.values())
     for shard in m.shards:  # hive partitions by the split file, zstd, checksums and row counts as recorded
@@ -176,3 +177,17 @@ def test_sigkill_then_rerun_gives_the_uninterrupted_data(gen, tmp_path, ep_scene
     assert dataset_bytes(out) == dataset_bytes(ref)
     leftovers = [p.name for p in out.rglob(".*")]
     assert leftovers == [], leftovers
+
+
+def test_a_node_without_the_built_in_house_generates_it(tmp_path, monkeypatch):
+    from main_bench.episodes.generate import _scene_path
+    from main_bench.scenes import builtin
+    from main_bench.scenes.loader import scene_content_hash
+
+    monkeypatch.setenv("MAIN_BENCH_CACHE", str(tmp_path / "node"))
+    spec = {"scene_id": "house_0002", "source": "builtin", "scene_path": str(tmp_path / "driver" / "house_0002.glb")}
+    path = _scene_path(spec)
+    assert path.is_file() and path.is_relative_to(tmp_path / "node")
+    here = builtin.ensure_builtin_scenes(["house_0002"], tmp_path / "driver")["house_0002"]
+    assert scene_content_hash(path) == scene_content_hash(here)
+    assert _scene_path({**spec, "scene_path": str(here)}) == here

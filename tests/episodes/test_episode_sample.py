@@ -7,6 +7,7 @@ import json
 from mb_testing import REPO
 
 from main_bench.episodes.dataset import load_episodes, read_manifest
+from main_bench.navmesh.build import ALGORITHM_VERSION
 from main_bench.scenes import builtin
 from main_bench.scenes.loader import scene_content_hash
 
@@ -31,8 +32,10 @@ def test_sample_covers_every_split_task_and_team_size():
     assert eps and all(e.num_agents == 2 and len(set(e.target_instance_ids)) == 1 for e in eps)
 
 
-def test_sample_scene_hashes_match_the_built_in_houses(tmp_path):
-    # When the house generator changes, the sample must be regenerated (docs/episodes.md has the command).
+def test_sample_matches_the_built_in_houses_and_navmesh(tmp_path):
+    # When the house generator or the navmesh changes, the sample must be regenerated (docs/episodes.md).
+    doc = json.loads((SAMPLE / "manifest.json").read_text())
+    assert doc["navmesh_algorithm"] == ALGORITHM_VERSION, "episodes/sample was made with another navmesh"
     m = read_manifest(SAMPLE)
     scene_id = sorted(m.scenes)[0]
     path = builtin.ensure_builtin_scenes([scene_id], tmp_path)[scene_id]

@@ -52,6 +52,24 @@ def test_head_on_move_into_wall_is_blocked_and_flagged():
         assert out.positions[0, 0] == pytest.approx(3.0 - R - 0.25, abs=0.003)
 
 
+def test_agent_overlapping_a_wall_slides_along_it_but_never_deeper():
+    # Navmesh cells may sit up to half a cell closer to a wall than the agent radius: such a start must not
+    # leave the agent stuck, nor let it push further into the wall.
+    with Simulator(thin_wall_room(3.0, 0.1), None, NO_RENDER) as sim:
+        x0 = 3.0 - R + 0.02
+        sim.reset([[x0, 1.0, 0.0]], [math.pi / 2])
+        out = sim.step([1])
+        assert out.moved[0] == pytest.approx(0.25, abs=0.003)
+        assert out.positions[0, 0] == pytest.approx(x0, abs=1e-6)
+        sim.reset([[x0, 1.0, 0.0]], [0.0])
+        for _ in range(20):
+            out = sim.step([1])
+            assert out.collided[0] and out.positions[0, 0] <= x0 + 0.001
+        sim.reset([[x0, 1.0, 0.0]], [math.pi])
+        out = sim.step([1])
+        assert not out.collided[0] and out.moved[0] == pytest.approx(0.25)
+
+
 def test_free_move_is_exact_and_unflagged():
     with Simulator(room(), None, NO_RENDER) as sim:
         sim.reset([[2.0, 2.0, 0.0]], [math.radians(30)])
