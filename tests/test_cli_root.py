@@ -48,7 +48,7 @@ def test_unknown_bench_area_is_bad_input(cli):
 
 def test_pybullet_banner_is_silenced():
     # pybullet prints a banner on the C-level stderr when imported; an error must stay one line.
-    code = "from main_bench.cli.app import _import_pybullet_quietly as q; q(); print('ok')"
+    code = "from main_bench.sim.physics import pb; print('ok')"
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == "ok\n"

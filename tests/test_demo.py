@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+from mb_testing import REPO
+
 from main_bench.episodes.validate import validate_dataset
 
 
@@ -13,8 +15,12 @@ def test_demo_runs_every_stage_and_reports_its_outputs(cli, tmp_path):
     assert r.code == 0, r.err
     doc = json.loads(r.out)
     assert doc["schema_version"] == 1 and doc["command"] == "demo"
-    assert doc["episodes"]["produced"] > 0
+    assert doc["episodes"]["produced"] > 0 and doc["episodes"]["validated"]
     assert validate_dataset(doc["episodes"]["dataset"]).ok
+    # In a source checkout the baselines are scored on the committed sample data set.
+    assert doc["scored"] == str(REPO / "episodes" / "sample")
+    summary = json.loads((out / "results" / "oracle" / "summary.json").read_text())
+    assert summary["dataset"]["path"] == str(REPO / "episodes" / "sample")
     board = json.loads((out / "leaderboard" / "leaderboard.json").read_text())
     assert board  # EvalAI-shaped results of both baselines
     html = (out / "leaderboard" / "index.html").read_text()
@@ -23,7 +29,7 @@ def test_demo_runs_every_stage_and_reports_its_outputs(cli, tmp_path):
         summary = json.loads((out / "results" / name / "summary.json").read_text())
         assert summary["submission"]["baseline"] is True
     assert list((out / "stats").glob("*.png")) and (out / "stats" / "stats.json").is_file()
-    assert set(doc["seconds"]) >= {"scenes", "episodes", "stats", "evaluate random", "evaluate oracle", "leaderboard"}
+    assert set(doc["seconds"]) >= {"scenes", "episodes", "validate", "stats", "evaluate random", "evaluate oracle", "leaderboard"}
 
     # A second run reuses the finished work and gives the same data set.
     manifest = (out / "episodes" / "manifest.json").read_bytes()

@@ -6,7 +6,6 @@ traceback is shown only with `--debug`.
 
 from __future__ import annotations
 
-import os
 import sys
 
 import click
@@ -55,29 +54,10 @@ def _register() -> None:
 _register()
 
 
-def _import_pybullet_quietly() -> None:
-    """Import pybullet with its C-level build banner discarded, so an error stays one line on stderr."""
-    if "pybullet" in sys.modules:
-        return
-    sys.stderr.flush()
-    saved = os.dup(2)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(devnull, 2)
-        import pybullet  # noqa: F401
-    except ImportError:
-        pass
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-        os.close(devnull)
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns the exit code."""
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
-    _import_pybullet_quietly()
     try:
         code = app(args=args, prog_name="main-bench", standalone_mode=False)
         if isinstance(code, int) and code:  # click returns `typer.Exit(n)`'s code when not standalone

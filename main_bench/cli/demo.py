@@ -10,29 +10,40 @@ from typing import Any
 
 import typer
 
+from ..errors import GenerationError
 from .common import JsonOption, emit
 
 #: The baselines the demo scores and ranks.
 DEMO_BASELINES = ("random", "oracle")
 
 
+def committed_sample() -> Path | None:
+    """The small data set committed under `episodes/sample/` of a source checkout, or None (a wheel install)."""
+    import main_bench
+
+    sample = Path(main_bench.__file__).resolve().parents[1] / "episodes" / "sample"
+    return sample if (sample / "manifest.json").is_file() else None
+
+
 @dataclass(frozen=True)
 class DemoSettings:
-    """What the demo runs: `houses` built-in val houses, `per_scene` episodes per (scene, task, team size),
-    `limit` evaluated episodes per track and baseline, `workers` processes."""
+    """What the demo runs: `houses` built-in val houses to generate episodes on, `per_scene` episodes per
+    (scene, task, team size); statistics, evaluation (`limit` episodes per track and baseline) and the
+    leaderboard on `episodes` (None: the committed sample, else the data set the demo generates)."""
 
     out: Path
+    episodes: Path | None = None
     houses: int = 2
     per_scene: int = 6
     agents: tuple[int, ...] = (2, 3)
-    limit: int = 4
+    limit: int = 8
     workers: int = 2
     renderer: str = "auto"
     seed: int = 0
 
 
 def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: None) -> dict[str, Any]:
-    """Run scenes -> navmesh -> episodes -> stats -> evaluate baselines -> leaderboard into `settings.out`.
+    """Run scenes -> navmesh -> episodes -> validate -> stats -> evaluate baselines -> leaderboard.
 
     Returns the output paths and the seconds each stage took. Re-running reuses what is already there
     (built houses, cached navmeshes, finished shards and result chunks).
@@ -40,6 +51,7 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
     from ..episodes.generate import generate_dataset
     from ..episodes.settings import GenerationSettings
     from ..episodes.sources import resolve_sources
+    from ..episodes.validate import validate_dataset
     from ..evaluation.runner import evaluate
     from ..evaluation.settings import EvalSettings, SubmissionMeta
     from ..leaderboard.build import build_leaderboard
@@ -58,35 +70,43 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
         log(f"  {stage}: {seconds[stage]:.1f} s")
         clock = now
 
-    log(f"[1/5] built-in houses and their navmeshes -> {cache}")
+    log(f"[1/6] built-in houses and their navmeshes -> {cache}")
     sources = resolve_sources(["builtin"], only_splits=["val"], cache_dir=cache)[: settings.houses]
     lap("scenes")
     dataset = out / "episodes"
-    log(f"[2/5] episodes ({len(sources)} houses, shared and individual targets, {settings.agents} agents)")
+    log(f"[2/6] episodes ({len(sources)} houses, shared and individual targets, {settings.agents} agents)")
     gen = GenerationSettings(agents=settings.agents, per_scene=settings.per_scene, seed=settings.seed)
     report = generate_dataset(gen, sources, dataset, NavMeshSettings(), workers=settings.workers,
                               cache_dir=cache / "navmesh")
     lap("episodes")
-    log("[3/5] dataset statistics")
-    stats = compute_stats(dataset, out / "stats", StatsSettings(cache_dir=cache))
+    log("[3/6] validating the episodes, distances recomputed from the navmesh")
+    check = validate_dataset(dataset, recheck=True, cache_dir=cache)
+    if not check.ok:
+        raise GenerationError(f"{dataset}: the generated data set failed validation:\n{check.render(limit=5)}")
+    lap("validate")
+    scored = settings.episodes or committed_sample() or dataset
+    log(f"[4/6] dataset statistics of {scored}")
+    stats = compute_stats(scored, out / "stats", StatsSettings(cache_dir=cache))
     lap("stats")
     results: dict[str, Path] = {}
     for name in DEMO_BASELINES:
-        log(f"[4/5] evaluating baseline:{name} ({settings.limit} episodes per track)")
+        log(f"[5/6] evaluating baseline:{name} on {scored} ({settings.limit} val episodes per track)")
         target = out / "results" / name
-        evaluate(EvalSettings(episodes=dataset, split="val", agent=f"baseline:{name}", out=target,
+        evaluate(EvalSettings(episodes=scored, split="val", agent=f"baseline:{name}", out=target,
                               workers=settings.workers, renderer=settings.renderer, limit=settings.limit,
                               seed=settings.seed, cache_dir=cache,
                               submission=SubmissionMeta(name=name, baseline=True,
                                                         description=f"main-bench built-in {name} baseline")))
         results[name] = target
         lap(f"evaluate {name}")
-    log("[5/5] leaderboard")
+    log("[6/6] leaderboard")
     board = build_leaderboard(list(results.values()), out / "leaderboard")
     lap("leaderboard")
     return {
         "out": str(out),
-        "episodes": {"dataset": str(dataset), "produced": report.produced, "requested": report.requested},
+        "episodes": {"dataset": str(dataset), "produced": report.produced, "requested": report.requested,
+                     "validated": check.ok},
+        "scored": str(scored),
         "stats": str(stats.out_dir),
         "results": {k: str(v) for k, v in results.items()},
         "leaderboard": {"html": str(board.index_html), "markdown": str(board.readme_md),
@@ -99,7 +119,8 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
 def _render(d: dict[str, Any]) -> str:
     return "\n".join([
         f"demo finished in {d['total_seconds']:.0f} s; outputs under {d['out']}",
-        f"  episodes    {d['episodes']['dataset']}  ({d['episodes']['produced']} episodes)",
+        f"  episodes    {d['episodes']['dataset']}  ({d['episodes']['produced']} episodes, validated)",
+        f"  scored on   {d['scored']}",
         f"  statistics  {d['stats']}",
         *(f"  results     {path}  (baseline:{name})" for name, path in d["results"].items()),
         f"  leaderboard {d['leaderboard']['html']}  (open in a browser)",
@@ -113,16 +134,18 @@ def register(app: typer.Typer) -> None:
     @app.command("demo")
     def demo(
         out: Path = typer.Option(Path("main-bench-demo"), "--out", help="Folder for every output of the demo."),
+        episodes: Path = typer.Option(None, "--episodes", help="Data set to score the baselines on "
+                                      "(default: the committed episodes/sample, else the one the demo makes)."),
         houses: int = typer.Option(2, "--houses", min=1, help="Built-in val houses to use."),
         per_scene: int = typer.Option(6, "--per-scene", min=1, help="Episodes per scene, task and team size."),
-        limit: int = typer.Option(4, "--limit", min=1, help="Episodes evaluated per track and baseline."),
+        limit: int = typer.Option(8, "--limit", min=1, help="Episodes evaluated per track and baseline."),
         workers: int = typer.Option(2, "--workers", min=1, help="Worker processes."),
         renderer: str = typer.Option("auto", "--renderer", help="auto | gl | tiny"),
         seed: int = typer.Option(0, "--seed", help="Seed of every random choice."),
         as_json: bool = JsonOption,
     ) -> None:
         """Run every stage end to end on built-in houses and say where the outputs are."""
-        settings = DemoSettings(out=out, houses=houses, per_scene=per_scene, limit=limit, workers=workers,
+        settings = DemoSettings(out=out, episodes=episodes, houses=houses, per_scene=per_scene, limit=limit, workers=workers,
                                 renderer=renderer, seed=seed)
         result = run_demo(settings, log=(lambda _m: None) if as_json else lambda m: typer.echo(m, err=True))
         emit("demo", result, as_json, _render)

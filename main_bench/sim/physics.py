@@ -11,10 +11,10 @@ them; agent-agent contact is solved in closed form (see `motion.py`).
 from __future__ import annotations
 
 import numpy as np
-import pybullet as pb
 
 from ..errors import InputError
 from ..scenes.loader import Scene
+from .quiet_pybullet import pb
 from .settings import SimSettings
 
 #: Gap (metres) between max_climb and the bottom of the wall probe, so a step of exactly max_climb passes.

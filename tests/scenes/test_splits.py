@@ -41,6 +41,13 @@ def test_builtin_split():
         assert split.split_of(scene_ids[0]) == name
 
 
+@pytest.mark.parametrize("path", sorted((REPO / "episodes" / "splits").glob("*.json")), ids=lambda p: p.name)
+def test_every_builtin_split_file_names_this_generator(path):
+    split = load_split_file(path)
+    if split.source == "builtin":
+        assert split.generator_version == GENERATOR_VERSION, f"{path.name}: regenerate its data after a generator change"
+
+
 def test_mp3d_split_is_the_standard_one():
     split = mp3d_split()
     assert split.source == "mp3d"

@@ -11,9 +11,9 @@ non-linear depth buffer d in [0, 1]; z-depth is near*far / (far - (far - near) *
 from __future__ import annotations
 
 import numpy as np
-import pybullet as pb
 
 from ...scenes.loader import Scene
+from ..quiet_pybullet import pb
 from ..settings import CameraSettings
 from .camera import NEAR_M, far_plane, view_axes
 from .materials import agent_colors, face_normals, scene_surfaces
