@@ -5,6 +5,8 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
+
 import main_bench
 
 
@@ -53,3 +55,22 @@ def test_pybullet_banner_is_silenced():
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == "ok\n"
     assert "pybullet build time" not in proc.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["nosuch"], "No such command 'nosuch'"),
+    (["--bogus"], "No such option: --bogus"),
+    (["scenes", "info"], "Missing argument"),
+    (["scenes", "generate", "out", "--count", "many"], "Invalid value for '--count'"),
+])
+def test_usage_errors_are_one_line_exit_2(cli, args, message):
+    r = cli(*args)
+    assert r.code == 2
+    lines = r.err.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and "--help" in lines[0], r.err
+    assert "Traceback" not in r.err
+
+
+def test_bare_command_prints_help(cli):
+    r = cli()
+    assert r.code == 2 and "Usage" in r.out and "scenes" in r.out

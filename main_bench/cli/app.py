@@ -54,22 +54,54 @@ def _register() -> None:
 _register()
 
 
+def _cli_exceptions() -> tuple[tuple[type, ...], tuple[type, ...], tuple[type, ...], tuple[type, ...]]:
+    """(exit, abort, usage, other click errors) classes of click and of the copy of click typer may bundle."""
+    modules = [click.exceptions]
+    try:
+        import typer._click.exceptions as bundled
+
+        modules.append(bundled)
+    except ImportError:
+        pass
+    exits = (click.exceptions.Exit, typer.Exit)
+    aborts = (click.exceptions.Abort, typer.Abort)
+    usage = tuple(m.UsageError for m in modules)
+    other = tuple(m.ClickException for m in modules)
+    return exits, aborts, usage, other
+
+
+_EXIT, _ABORT, _USAGE, _CLICK_ERROR = _cli_exceptions()
+
+
+def _usage_line(exc: Exception) -> str:
+    ctx = getattr(exc, "ctx", None)
+    where = ctx.command_path if ctx is not None else "main-bench"
+    return f"main-bench: error: {exc.format_message()} (see '{where} --help')"  # type: ignore[attr-defined]
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the console script; returns the exit code."""
+    """Entry point of the console script; returns the exit code (0 ok, 1 failed check, 2 bad input)."""
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     try:
         code = app(args=args, prog_name="main-bench", standalone_mode=False)
         if isinstance(code, int) and code:  # click returns `typer.Exit(n)`'s code when not standalone
             return code
-    except click.exceptions.Exit as exc:
-        return int(exc.exit_code or 0)
-    except click.ClickException as exc:
-        exc.show()
-        return int(exc.exit_code)
-    except click.exceptions.Abort:
+    except _EXIT as exc:
+        return int(getattr(exc, "exit_code", 0) or 0)
+    except _ABORT:
         typer.echo("main-bench: aborted", err=True)
         return 130
+    except _USAGE as exc:
+        if type(exc).__name__ == "NoArgsIsHelpError":
+            exc.ctx.info_name = exc.ctx.command_path  # type: ignore[union-attr]
+            typer.echo(exc.ctx.get_help())  # type: ignore[union-attr]
+            return 2
+        typer.echo(_usage_line(exc), err=True)
+        return 2
+    except _CLICK_ERROR as exc:
+        typer.echo(f"main-bench: error: {exc.format_message()}", err=True)  # type: ignore[attr-defined]
+        return int(getattr(exc, "exit_code", 1))
     except MainBenchError as exc:
         if debug:
             raise

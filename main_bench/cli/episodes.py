@@ -49,6 +49,13 @@ def generate(
     max_rounds: int = typer.Option(8, "--max-rounds", help="Sampling rounds per shard before giving up."),
     shard_size: int = typer.Option(50_000, "--shard-size", help="Most episodes per shard file."),
     seed: int = typer.Option(0, "--seed", help="Seed of all randomness."),
+    max_steps: int = typer.Option(500, "--max-steps", help="Task: max steps per agent (recorded)."),
+    forward_step: float = typer.Option(0.25, "--forward-step", help="Task: move_forward distance (m)."),
+    turn_angle: float = typer.Option(30.0, "--turn-angle", help="Task: turn_left/right angle (degrees)."),
+    camera: str = typer.Option("128x128", "--camera", help="Task: camera WIDTHxHEIGHT in pixels."),
+    hfov: float = typer.Option(90.0, "--hfov", help="Task: camera horizontal field of view (degrees)."),
+    camera_height: float = typer.Option(1.25, "--camera-height", help="Task: camera height above the feet (m)."),
+    max_depth: float = typer.Option(10.0, "--max-depth", help="Task: depth saturates at this distance (m)."),
     workers: int = typer.Option(1, "--workers", help="Local worker processes."),
     executor: str = typer.Option("local", "--executor", help="local or ray."),
     ray_address: str | None = typer.Option(None, "--ray-address", help="Ray cluster address (default: local)."),
@@ -71,12 +78,15 @@ def generate(
 
     if up not in ("y", "z", "auto"):
         raise InputError(f"--up must be y, z or auto, got {up!r}")
+    width, height = _camera_size(camera)
     settings = GenerationSettings(
         tasks=_tasks(task), agents=parse_int_list(agents, "--agents", 1, 8), per_scene=per_scene,
         min_distance=min_distance, max_distance=max_distance, success_distance=success_distance,
         goal_radius=goal_radius, start_margin=start_margin, cross_floor=cross_floor,
         ratio_threshold=ratio_threshold, min_island_area=min_island_area, max_rounds=max_rounds,
-        shard_size=shard_size, seed=seed)
+        shard_size=shard_size, seed=seed, max_steps=max_steps, forward_step=forward_step,
+        turn_angle_deg=turn_angle, camera_width=width, camera_height=height, camera_hfov_deg=hfov,
+        camera_height_m=camera_height, max_depth=max_depth)
     nav = NavMeshSettings(agent_radius=agent_radius, agent_height=agent_height, max_climb=max_climb,
                           max_slope=max_slope, cell_size=cell_size)
     only_splits = tuple(s.strip() for s in only.split(",") if s.strip()) if only else None
@@ -89,6 +99,14 @@ def generate(
                                   ray_address=ray_address, overwrite=overwrite, cache_dir=nav_cache,
                                   progress=advance)
     emit("episodes generate", report.to_json(), as_json, lambda d: report.render())
+
+
+def _camera_size(text: str) -> tuple[int, int]:
+    try:
+        width, height = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise InputError(f"--camera must be WIDTHxHEIGHT in pixels, e.g. 128x128, got {text!r}") from None
+    return width, height
 
 
 def _default_navmesh_cache() -> Path | None:

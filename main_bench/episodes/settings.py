@@ -15,13 +15,16 @@ MAX_AGENTS = 8
 
 @dataclass(frozen=True)
 class GenerationSettings:
-    """What to sample and how. Distances in metres, angles in radians.
+    """What to sample and how, and the task every evaluation on the data set uses. Distances in metres.
 
     `per_scene`: episodes per (scene, task, agent count). `ratio_*`: Habitat PointNav's thinning of near-straight
     episodes: an agent whose geodesic/Euclidean ratio is below `ratio_threshold` is kept only with probability
     `ratio_keep_scale * (ratio - ratio_keep_offset)**2` (Habitat-lab's `_ratio_sample_rate`: 20, 0.98, 1.1);
     `ratio_threshold = 0` turns the thinning off. `goal_radius`: an object's goal points are the navigable cells
     within this horizontal distance of its footprint. `shard_size`: most episodes in one part file.
+    Task (recorded so evaluation uses the data set's own values): `success_distance`, `max_steps` per agent,
+    `forward_step` (m) and `turn_angle_deg` of the actions, and the camera: `camera_width` x `camera_height`
+    pixels, `camera_hfov_deg`, `camera_height_m` above the feet, `max_depth` (m).
     """
 
     tasks: tuple[str, ...] = ("shared", "individual")
@@ -41,6 +44,14 @@ class GenerationSettings:
     max_rounds: int = 8
     shard_size: int = 50_000
     seed: int = 0
+    max_steps: int = 500
+    forward_step: float = 0.25
+    turn_angle_deg: float = 30.0
+    camera_width: int = 128
+    camera_height: int = 128
+    camera_hfov_deg: float = 90.0
+    camera_height_m: float = 1.25
+    max_depth: float = 10.0
 
     def __post_init__(self) -> None:
         for task in self.tasks:
@@ -63,6 +74,13 @@ class GenerationSettings:
             raise InputError(f"--success-distance must be positive, got {self.success_distance}")
         if self.shard_size < 1 or self.max_rounds < 1 or self.point_goal_episodes < 1:
             raise InputError("shard_size, max_rounds and point_goal_episodes must be at least 1")
+        if self.max_steps < 1 or self.camera_width < 1 or self.camera_height < 1:
+            raise InputError(f"--max-steps and the camera size must be at least 1, got {self.max_steps}, "
+                             f"{self.camera_width}x{self.camera_height}")
+        for name in ("forward_step", "turn_angle_deg", "camera_hfov_deg", "camera_height_m", "max_depth"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise InputError(f"{name.replace('_', '-')} must be a positive number, got {value}")
         if not (0 <= self.seed < 2**63):
             raise InputError(f"--seed must be an integer from 0 to 2**63-1, got {self.seed}")
 

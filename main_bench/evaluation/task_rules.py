@@ -1,8 +1,9 @@
 """The task rules and the simulator settings of a data set, read from its manifest.
 
 Every submission is scored with the data set's own values: agent radius, height and max climb (its navmesh
-settings), success distance and max steps per agent (its generation settings; a manifest without `max_steps`
-gets DESIGN.md's default, 500). Actions and camera are DESIGN.md's defaults.
+settings), success distance, max steps per agent, the actions' step and turn, and the camera (its generation
+settings; a manifest from before these were recorded gets DESIGN.md's defaults: 500 steps, 0.25 m, 30 deg,
+128 x 128, hfov 90 deg at 1.25 m, depth to 10 m).
 """
 
 from __future__ import annotations
@@ -26,12 +27,24 @@ def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
 
 
 def sim_settings_from_manifest(manifest: Any, renderer: str) -> Any:
-    """`SimSettings` with the data set's agent body (radius, height, max climb) and the chosen renderer."""
-    from ..sim.settings import SimSettings
+    """`SimSettings` with the data set's agent body (radius, height, max climb), actions and camera, and the
+    chosen renderer."""
+    from ..sim.settings import CameraSettings, SimSettings
 
     nav = manifest.navmesh()
+    gen = manifest.settings
+    default_cam = CameraSettings()
+    camera = CameraSettings(
+        width=int(getattr(gen, "camera_width", default_cam.width)),
+        height=int(getattr(gen, "camera_height", default_cam.height)),
+        hfov_deg=float(getattr(gen, "camera_hfov_deg", default_cam.hfov_deg)),
+        height_m=float(getattr(gen, "camera_height_m", default_cam.height_m)),
+        max_depth=float(getattr(gen, "max_depth", default_cam.max_depth)))
+    defaults = SimSettings()
     return SimSettings(agent_radius=float(nav.agent_radius), agent_height=float(nav.agent_height),
-                       max_climb=float(nav.max_climb), renderer=renderer)
+                       max_climb=float(nav.max_climb), renderer=renderer, camera=camera,
+                       forward_step=float(getattr(gen, "forward_step", defaults.forward_step)),
+                       turn_angle_deg=float(getattr(gen, "turn_angle_deg", defaults.turn_angle_deg)))
 
 
 def rules_json(manifest: Any) -> dict[str, Any]:
