@@ -61,6 +61,7 @@ class Manifest:
     shards: tuple[ShardEntry, ...]
     shortfalls: tuple[dict[str, Any], ...]
     manifest_hash: str
+    navmesh_algorithm: int | None = None
 
     @property
     def goal_radius(self) -> float:
@@ -140,7 +141,9 @@ def read_manifest(path: str | Path) -> Manifest:
                         toolkit_version=str(doc.get("toolkit_version", "")), settings=settings,
                         navmesh_settings=dict(doc["navmesh_settings"]), seed=int(doc["seed"]), scenes=scenes,
                         shards=shards, shortfalls=tuple(doc.get("shortfalls", ())),
-                        manifest_hash=sha256_file(file))
+                        manifest_hash=sha256_file(file),
+                        navmesh_algorithm=None if doc.get("navmesh_algorithm") is None
+                        else int(doc["navmesh_algorithm"]))
     except (KeyError, TypeError, ValueError, InputError) as exc:
         raise DatasetError(f"malformed manifest ({type(exc).__name__}: {exc}); regenerate the data set",
                            path=file) from None

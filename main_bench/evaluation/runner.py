@@ -56,11 +56,25 @@ class EvaluationOutcome:
         return self.agent_steps / self.seconds if self.seconds > 0 else 0.0
 
 
+def check_navmesh_algorithm(manifest: Any) -> None:
+    """Refuse a data set whose distances came from another navmesh algorithm than this toolkit's: its shortest
+    paths (SPL's l_i) and today's distances to goal would not agree."""
+    from ..navmesh.build import ALGORITHM_VERSION
+
+    made_with = manifest.navmesh_algorithm
+    if made_with is not None and made_with != ALGORITHM_VERSION:
+        raise DatasetError(f"made with navmesh algorithm {made_with}, this main-bench has {ALGORITHM_VERSION}, so "
+                           "its distances would not match the evaluator's; regenerate it (main-bench episodes "
+                           "generate ... --overwrite) or evaluate with the main-bench version that made it",
+                           path=manifest.root)
+
+
 def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
     """(manifest, chunks) of the evaluation; a split/task/agents selection with no episodes raises DatasetError."""
     from ..episodes.dataset import load_table, read_manifest
 
     manifest = read_manifest(settings.episodes)
+    check_navmesh_algorithm(manifest)
     tracks = sorted({(s.task, int(s.agents)) for s in manifest.shards if s.split == settings.split})
     if not tracks:
         splits = sorted({s.split for s in manifest.shards})

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import os
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import ResultsError
@@ -43,6 +44,16 @@ def build_sections(subs: list[LoadedSubmission], settings: LeaderboardSettings) 
     return sections
 
 
+def _shown_path(dataset: str, out: Path) -> str:
+    """The data set's path as the report shows it: relative to the report when both lie in one tree (so a
+    published report does not show the organiser's absolute paths), else as recorded."""
+    if not dataset or not os.path.isabs(dataset):
+        return dataset
+    report = out.resolve()
+    common = os.path.commonpath([dataset, str(report)])
+    return os.path.relpath(dataset, report) if common != os.path.sep else dataset
+
+
 def build_leaderboard(results_dirs: list[str | Path], out_dir: str | Path,
                       settings: LeaderboardSettings | None = None) -> LeaderboardReport:
     """Build the report of `results_dirs` into `out_dir`; every file is written atomically.
@@ -61,8 +72,9 @@ def build_leaderboard(results_dirs: list[str | Path], out_dir: str | Path,
             raise ResultsError("results directory given twice; pass each once", path=d)
         seen.add(key)
         subs.append(load_submission(d))
-    sections = build_sections(subs, settings)
     out = Path(out_dir)
+    sections = [replace(sec, dataset_path=_shown_path(sec.dataset_path, out))
+                for sec in build_sections(subs, settings)]
     if out.exists() and not out.is_dir():
         raise ResultsError("--out exists and is not a folder; choose a folder for the report", path=out)
     figure_files: dict[tuple[int, str], str] = {}

@@ -156,6 +156,19 @@ def test_bad_input_is_one_line_exit_2_nothing_written(cli, tiny_dataset, tmp_pat
     assert not (tmp_path / "r").exists()
 
 
+def test_data_set_from_another_navmesh_algorithm_is_refused(cli, tiny_dataset, tmp_path):
+    dataset, cache = tiny_dataset
+    copy = tmp_path / "old"
+    shutil.copytree(dataset, copy)
+    doc = json.loads((copy / "manifest.json").read_text())
+    doc["navmesh_algorithm"] = int(doc["navmesh_algorithm"]) - 1
+    (copy / "manifest.json").write_text(json.dumps(doc))
+    res = cli("evaluate", "--episodes", copy, "--split", "val", "--agent", "baseline:random",
+              "--out", tmp_path / "r", "--cache-dir", cache)
+    assert res.code == 2 and "made with navmesh algorithm" in res.err and "regenerate" in res.err
+    assert not (tmp_path / "r").exists()
+
+
 def _hostile(tmp_path: Path, modes: dict[str, str]) -> str:
     folder = tmp_path / "hostile"
     folder.mkdir()
