@@ -248,3 +248,37 @@ def test_every_room_is_on_the_main_navmesh_island(tmp_path, seed):
         xs, ys = np.meshgrid(np.arange(x0 + 0.1, x1 - 0.1, 0.1), np.arange(y0 + 0.1, y1 - 0.1, 0.1))
         pts = np.stack([xs.ravel(), ys.ravel(), np.full(xs.size, r.floor_z)], axis=1)
         assert np.any(nm.island_of(pts) == main.index), (h.house_id, r.name)
+
+
+def test_walls_are_thin_and_rooms_are_storey_high(houses):
+    """Interior walls 0.1 m thick, exterior 0.2 m, rooms 2.5 to 3 m high (issue 2, point 5)."""
+    for h in houses:
+        for name, boxes in h.structure:
+            if not name.startswith("walls_"):
+                continue
+            for b in boxes:
+                thickness = min(b.hi[0] - b.lo[0], b.hi[1] - b.lo[1])
+                full_height = b.lo[2] == min(x.lo[2] for x in boxes)
+                if full_height and max(b.hi[0] - b.lo[0], b.hi[1] - b.lo[1]) > 0.3:
+                    assert thickness == pytest.approx(0.1, abs=1e-6) or thickness == pytest.approx(0.2, abs=1e-6), \
+                        (h.house_id, name, b)
+        for r in h.rooms:
+            assert 2.5 <= r.height <= 3.0, (h.house_id, r.name, r.height)
+
+
+WALL_CATEGORIES = ("bed", "wardrobe", "sofa", "refrigerator", "toilet", "bathtub", "counter", "tv", "cabinet")
+
+
+def test_large_furniture_stands_against_a_wall(houses):
+    """Beds, wardrobes, sofas, kitchens and bathroom fixtures stand with a side within 0.15 m of their room's wall."""
+    rooms = {(h.house_id, r.name): r for h in houses for r in h.rooms}
+    checked = against = 0
+    for h in houses:
+        for f in h.furniture:
+            if f.category not in WALL_CATEGORIES:
+                continue
+            x0, y0, x1, y1 = rooms[(h.house_id, f.room)].inner
+            gaps = (f.bbox_min[0] - x0, f.bbox_min[1] - y0, x1 - f.bbox_max[0], y1 - f.bbox_max[1])
+            checked += 1
+            against += min(gaps) <= 0.15
+    assert checked > 100 and against / checked >= 0.95, (against, checked)
