@@ -141,6 +141,18 @@ def clearance(nbr, ix, iy, rects, limit):
 
 
 @njit(cache=True)
+def _renumber(keep):
+    """New ids of the kept nodes (-1 for dropped ones) and how many are kept."""
+    new_id = np.full(keep.shape[0], -1, np.int64)
+    m = 0
+    for u in range(keep.shape[0]):
+        if keep[u]:
+            new_id[u] = m
+            m += 1
+    return new_id, m
+
+
+@njit(cache=True)
 def relax_diagonals(nbr_pre, keep, nbr, ix, iy, best, thr):
     """Add diagonal links between kept nodes (renumbered `nbr`) that erosion alone cut.
 
@@ -149,12 +161,7 @@ def relax_diagonals(nbr_pre, keep, nbr, ix, iy, best, thr):
     sides kept) would make paths step around corners that are in fact clear.
     """
     n = nbr_pre.shape[0]
-    new_id = np.full(n, -1, np.int64)
-    m = 0
-    for u in range(n):
-        if keep[u]:
-            new_id[u] = m
-            m += 1
+    new_id, m = _renumber(keep)
     for u in range(n):
         if not keep[u]:
             continue
@@ -179,12 +186,7 @@ def compact_links(nbr, keep, ndirs=4):
     """Links among kept nodes, renumbered. With ndirs=4 diagonals must be recomputed afterwards; ndirs=8 keeps
     them (right when whole components are removed)."""
     n = nbr.shape[0]
-    new_id = np.full(n, -1, np.int64)
-    m = 0
-    for u in range(n):
-        if keep[u]:
-            new_id[u] = m
-            m += 1
+    new_id, m = _renumber(keep)
     out = np.full((m, 8), -1, np.int64)
     for u in range(n):
         if not keep[u]:
