@@ -31,8 +31,14 @@ def atomic_path(path: str | Path, suffix: str | None = None) -> Iterator[Path]:
     On an exception the temporary file is removed and `path` is left as it was.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or ".tmp", dir=path.parent)
+    if path.is_dir():
+        raise InputError("is a folder; give a file name to write", path=path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or ".tmp", dir=path.parent)
+    except OSError as exc:
+        raise InputError(f"cannot write here ({exc.strerror or type(exc).__name__}); choose another output path",
+                         path=path) from None
     os.close(fd)
     tmp_path = Path(tmp)
     try:

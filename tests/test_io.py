@@ -64,3 +64,14 @@ def test_schema_version_missing_or_newer_is_refused(tmp_path):
         check_schema_version({}, 1, tmp_path, "summary")
     with pytest.raises(InputError, match="upgrade main-bench"):
         check_schema_version({"schema_version": 3}, 2, tmp_path, "summary")
+
+
+def test_unwritable_output_paths_are_input_errors(tmp_path):
+    a_file = tmp_path / "file.txt"
+    a_file.write_text("keep")
+    with pytest.raises(InputError, match="cannot write here") as info:
+        atomic_write_text(a_file / "inside" / "out.json", "x")
+    assert str(a_file / "inside" / "out.json") in str(info.value)
+    with pytest.raises(InputError, match="is a folder"):
+        atomic_write_text(tmp_path, "x")
+    assert a_file.read_text() == "keep"

@@ -77,7 +77,13 @@ def _core(scene, navmesh, count: int, repeats: int) -> dict:
 
 def _naive(scene, navmesh, budget_s: float) -> dict:
     """Per-pair networkx queries with the same checks, for `budget_s` seconds (graph build not counted)."""
-    import networkx as nx
+    try:
+        import networkx as nx
+    except ImportError:
+        from ..errors import InputError
+
+        raise InputError("the episodes benchmark compares with networkx, which is not installed; "
+                         "pip install -e '.[bench]'") from None
     from scipy.spatial import cKDTree
 
     from ..episodes.targets import TargetBank

@@ -23,7 +23,7 @@ def build(
     allow_mixed: bool = typer.Option(False, "--allow-mixed",
                                      help="Show submissions scored on different data sets in separate sections "
                                           "instead of refusing them."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the bootstrap confidence intervals."),
+    seed: int = typer.Option(0, "--seed", min=0, help="Seed of the bootstrap confidence intervals."),
     resamples: int = typer.Option(2000, "--resamples", min=100, help="Bootstrap resamples per interval."),
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Draw the plots (slower)."),
     as_json: bool = JsonOption,

@@ -20,7 +20,7 @@ def stats(
     maps: bool = typer.Option(True, "--maps/--no-maps",
                               help="Draw density maps over the scenes' navigable cells (builds or reads navmeshes)."),
     cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache of built-in scenes and navmeshes."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the bootstrap intervals."),
+    seed: int = typer.Option(0, "--seed", min=0, help="Seed of the bootstrap intervals."),
     as_json: bool = JsonOption,
 ) -> None:
     """Dataset statistics and figures (MAIN Fig. 3a/3b, distance histograms, ratio, start/target density)."""

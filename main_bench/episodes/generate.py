@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from ..errors import DatasetError, InputError
+from ..errors import DatasetError, InputError, NavMeshError
 from ..io import atomic_write_json, read_json, sha256_file
 from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, identity
 from .plan import Shard, group_units, plan_shards
@@ -96,10 +96,16 @@ def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
         raise DatasetError(f"scene {spec['scene_id']!r} changed since generation started (content hash "
                            f"{scene.content_hash[:12]} != {spec['scene_hash'][:12]}); start again with --overwrite",
                            path=spec["scene_path"])
-    if spec.get("cache_dir"):
-        navmesh = NavMesh.build_cached(scene, nav_settings, Path(spec["cache_dir"]))
-    else:
-        navmesh = NavMesh.build(scene, nav_settings)
+    try:
+        if spec.get("cache_dir"):
+            navmesh = NavMesh.build_cached(scene, nav_settings, Path(spec["cache_dir"]))
+        else:
+            navmesh = NavMesh.build(scene, nav_settings)
+    except NavMeshError as exc:
+        if exc.path is not None:
+            raise
+        raise NavMeshError(f"scene {spec['scene_id']!r}: {exc}; or leave this scene out of --scenes",
+                           path=spec["scene_path"]) from None
     bank = TargetBank(scene, navmesh, settings)
     separation = settings.separation(nav_settings.agent_radius)
     made = {}

@@ -66,7 +66,8 @@ class GenerationSettings:
         if not (0 <= self.min_distance < self.max_distance) or not math.isfinite(self.max_distance):
             raise InputError(
                 f"need 0 <= --min-distance < --max-distance (finite), got {self.min_distance} and {self.max_distance}")
-        for name in ("success_distance", "goal_radius", "start_margin", "min_island_area", "ratio_keep_scale"):
+        for name in ("success_distance", "goal_radius", "start_margin", "min_island_area", "ratio_keep_scale",
+                     "ratio_threshold", "ratio_keep_offset"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise InputError(f"{name.replace('_', '-')} must be a finite number >= 0, got {value}")

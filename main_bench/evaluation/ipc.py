@@ -78,8 +78,8 @@ def recv_reply(sock: socket.socket, deadline: float | None) -> dict[str, Any]:
         raise ValueError(f"reply of {size} bytes is longer than the {MAX_REPLY_BYTES} allowed")
     try:
         reply = json.loads(_recv_exact(sock, size, deadline))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"reply is not JSON ({exc})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise ValueError(f"reply is not JSON ({type(exc).__name__})") from None
     if not isinstance(reply, dict):
         raise ValueError(f"reply is a JSON {type(reply).__name__}, not an object")
     return reply

@@ -123,6 +123,8 @@ class PolicyProcess:
 
     def act(self, observations: dict[str, dict]) -> dict[str, int]:
         """One step: the acting agents' observations in, one validated action (int 0..3) per acting agent out."""
+        if self._proc is not None and self._proc.poll() is not None:
+            raise PolicyError(self._death_reason())  # it died on its own since the last call
         if not self.alive:
             raise PolicyError("dead: the policy process was stopped after an earlier failure; call restart()")
         left = self.limits.episode_seconds - self._episode_used
@@ -205,7 +207,11 @@ class PolicyProcess:
         if reply.get("seq") != self._seq:
             self._kill()
             raise PolicyError(f"invalid_action: reply out of order (expected {self._seq}, got {reply.get('seq')!r})")
-        self.last_policy_seconds = float(reply.get("seconds", 0.0) or 0.0)
+        seconds = reply.get("seconds", 0.0) or 0.0
+        if not isinstance(seconds, int | float) or isinstance(seconds, bool):
+            self._kill()
+            raise PolicyError(f"invalid_action: unreadable reply field seconds={seconds!r}")
+        self.last_policy_seconds = float(seconds)
         if reply.get("status") == "error":
             raise self._policy_exception(reply, op)
         if reply.get("status") != "ok":

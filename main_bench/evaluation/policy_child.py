@@ -37,6 +37,7 @@ def main(argv: list[str]) -> int:
             sys.path.insert(0, entry)
     from . import protocol  # noqa: F401 - decodes EpisodeInfo; our own code, imported before the memory limit
 
+    _die_with_parent()
     _limit_memory(boot["memory_mb"])
     policy = _load(sock, boot)
     if policy is None:
@@ -45,11 +46,27 @@ def main(argv: list[str]) -> int:
 
 
 def _limit_memory(memory_mb: int) -> None:
+    # Soft and hard limit alike, so the policy cannot raise its own limit.
     limit = int(memory_mb) * 1024 * 1024
     _, hard = resource.getrlimit(resource.RLIMIT_AS)
     if hard != resource.RLIM_INFINITY:
         limit = min(limit, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+
+def _die_with_parent() -> None:
+    """Linux: have the kernel SIGKILL this process when the evaluator worker that started it dies, so a policy
+    busy in `act` is never left running after its evaluator was killed."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        pr_set_pdeathsig = 1
+        libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
+    except (OSError, AttributeError):
+        return
 
 
 def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:

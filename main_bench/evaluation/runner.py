@@ -108,7 +108,7 @@ def submission_meta(settings: EvalSettings) -> SubmissionMeta:
     links = meta.links or tuple(doc.get("links") or ())
     if isinstance(links, str):
         links = (links,)
-    is_baseline = meta.baseline or bool(doc.get("baseline", False)) or spec.startswith("baseline:")
+    is_baseline = meta.baseline or doc.get("baseline") is True or spec.startswith("baseline:")
     name = meta.name or str(doc.get("name") or "") or (spec if spec.startswith("baseline:") else Path(
         spec.split(":", 1)[0]).stem or spec)
     return SubmissionMeta(name=name, description=meta.description or str(doc.get("description") or ""),
@@ -118,8 +118,12 @@ def submission_meta(settings: EvalSettings) -> SubmissionMeta:
 
 def _check_run_file(out: Path, identity: dict[str, Any]) -> None:
     path = out / RUN_FILE
+    if out.exists() and not out.is_dir():
+        raise ResultsError("--out exists and is not a folder; give a folder for the results", path=out)
     if path.is_file():
         old = read_json(path, what="results run file")
+        if not isinstance(old, dict):
+            raise ResultsError("run.json is not a main-bench run file; give a new --out", path=path)
         if old.get("identity") != identity:
             diff = sorted(k for k in identity if (old.get("identity") or {}).get(k) != identity[k])
             raise ResultsError(f"holds a different evaluation (differs in {', '.join(diff)}); give a new --out "
@@ -145,7 +149,7 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
     meta = submission_meta(settings)
     settings = replace(settings, submission=meta)
     out = Path(settings.out)
-    _check_run_file(out, settings.identity())
+    _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
     pending = [c for c in chunks if not c.finished(out)]
     skipped = len(chunks) - len(pending)
     if progress is not None:

@@ -100,7 +100,8 @@ class EvalSettings:
                     raise InputError(f"--task must be shared, individual or both, got {task!r}")
 
     def identity(self) -> dict[str, Any]:
-        """What makes two runs the same evaluation (compared on resume); workers and executor excluded."""
+        """What makes two runs the same evaluation (compared on resume, with the data set's manifest hash);
+        workers and executor excluded: they do not change the results."""
         return {
             "episodes": str(Path(self.episodes).resolve()),
             "split": self.split,
@@ -111,6 +112,7 @@ class EvalSettings:
             "seed": self.seed,
             "track": self.track,
             "chunk_size": self.chunk_size,
+            "renderer": self.renderer,
         }
 
     def to_json(self) -> dict[str, Any]:
@@ -119,7 +121,6 @@ class EvalSettings:
             **self.identity(),
             "out": str(self.out),
             "workers": self.workers,
-            "renderer": self.renderer,
             "executor": self.executor,
             "max_consecutive_failures": self.max_consecutive_failures,
             "limits": asdict(self.limits),

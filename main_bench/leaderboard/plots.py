@@ -26,8 +26,13 @@ def _colors(names: list[str]) -> dict[str, tuple]:
     return {n: cmap(i % 10) for i, n in enumerate(names)}
 
 
+def _plain(text: str) -> str:
+    """`text` shown literally: matplotlib would read `$...$` in a user's name as TeX (and can fail on it)."""
+    return text.replace("$", r"\$")
+
+
 def _label(sub) -> str:
-    return sub.name + (" (baseline)" if sub.baseline else "")
+    return _plain(sub.name) + (" (baseline)" if sub.baseline else "")
 
 
 def method_bars(tracks: list[TrackTable], names: list[str]) -> Figure:
@@ -147,7 +152,7 @@ def scene_heatmap(subs: list[LoadedSubmission], metric: str = "success") -> Figu
                     v = grid[i, j] * 100
                     ax.text(j, i, f"{v:.0f}", ha="center", va="center", fontsize=8,
                             color="white" if v < 60 else "black")
-        ax.set_xticks(range(len(scenes)), scenes, rotation=40, ha="right", fontsize=8)
+        ax.set_xticks(range(len(scenes)), [_plain(sc) for sc in scenes], rotation=40, ha="right", fontsize=8)
         ax.set_yticks(range(len(subs)), names, fontsize=8)
         ax.set_title(f"{task}-target: team {metric} (%) per scene", fontsize=10)
         fig.colorbar(im, ax=ax, fraction=0.03)
@@ -173,7 +178,7 @@ def agents_breakdown(tracks: list[TrackTable], names: list[str]) -> Figure:
                 m = np.array([e.metrics[metric].mean for _, e in pts]) * 100
                 lo = m - np.array([e.metrics[metric].lo for _, e in pts]) * 100
                 hi = np.array([e.metrics[metric].hi for _, e in pts]) * 100 - m
-                label = name + (" (baseline)" if pts[0][1].submission.baseline else "")
+                label = _label(pts[0][1].submission)
                 ax.errorbar(xs, m, yerr=[lo, hi], marker="o", capsize=3, color=colors[name], label=label)
             ax.set_xticks(sorted({t.agents for t in mine}))
             ax.set_xlabel("number of agents")

@@ -71,7 +71,7 @@ def submission_from_results(results: Results) -> Submission:
         description=_text(meta.get("description")),
         links=tuple(_text(v) for v in links),
         date=_text(meta.get("date")),
-        baseline=bool(meta.get("baseline", False)),
+        baseline=meta.get("baseline") is True,
         results_dir=results.path,
         manifest_hash=manifest_hash,
         dataset_path=_text(dataset.get("path")),

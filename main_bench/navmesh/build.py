@@ -57,6 +57,10 @@ def smooth_iterations(cell_size: float) -> int:
     return int(math.ceil(1.5 * (SMOOTH_WIDTH_M / cell_size) ** 2))
 
 
+#: Most grid columns a build accepts (a 220 m x 220 m scene at 0.05 m): beyond it memory and time run away.
+MAX_COLUMNS = 20_000_000
+
+
 def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> Grid:
     """Build the node grid of a triangle soup (canonical frame, metres). Raises NavMeshError if empty."""
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
@@ -68,6 +72,10 @@ def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> G
     y0 = math.floor(lo[1] / cs) * cs - cs
     nx = int(math.ceil((hi[0] - x0) / cs)) + 2
     ny = int(math.ceil((hi[1] - y0) / cs)) + 2
+    if nx * ny > MAX_COLUMNS:
+        raise NavMeshError(f"the scene spans {hi[0] - lo[0]:.1f} x {hi[1] - lo[1]:.1f} m, {nx} x {ny} cells at "
+                           f"cell_size={cs} m, more than the {MAX_COLUMNS:,} a build allows; raise --cell-size, "
+                           "or check the scene's units (--scale)")
     min_nz = math.cos(math.radians(s.max_slope))
     col, zlo, zhi, kind, rect = _raster.rasterize(vertices, faces, x0, y0, cs, nx, ny, min_nz)
     if not (kind == 1).any():

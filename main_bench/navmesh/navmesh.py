@@ -63,9 +63,9 @@ def geometry_hash(vertices: np.ndarray, faces: np.ndarray) -> str:
     return h.hexdigest()
 
 
-def build_key(geom_hash: str, settings: NavMeshSettings) -> str:
-    """Cache key: geometry, settings and algorithm version."""
-    doc = {"geometry": geom_hash, "settings": settings.to_json(), "algorithm": ALGORITHM_VERSION}
+def build_key(geom_hash: str, settings: NavMeshSettings, algorithm: int = ALGORITHM_VERSION) -> str:
+    """Cache key: geometry, settings and algorithm version (this toolkit's unless given)."""
+    doc = {"geometry": geom_hash, "settings": settings.to_json(), "algorithm": algorithm}
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
 
@@ -84,6 +84,8 @@ class NavMesh:
         self.scene_id = scene_id
         self.scene_hash = scene_hash
         self.geometry_hash = geom_hash
+        #: The build algorithm's version (a loaded file's own; see `build_key`).
+        self.algorithm_version = ALGORITHM_VERSION
         cs = grid.cell_size
         self._px = grid.x0 + (grid.ix + 0.5) * cs
         self._py = grid.y0 + (grid.iy + 0.5) * cs
@@ -143,14 +145,15 @@ class NavMesh:
 
     @property
     def build_key(self) -> str:
-        """The cache key this navmesh was built under (geometry hash, settings, algorithm version)."""
-        return build_key(self.geometry_hash, self.settings)
+        """The cache key this navmesh was built under (geometry hash, settings, and the algorithm version that
+        built it: a file from an older algorithm never matches a fresh key, so it is rebuilt)."""
+        return build_key(self.geometry_hash, self.settings, self.algorithm_version)
 
     def save(self, path: str | Path) -> None:
         """Write the navmesh (compressed NumPy archive with a JSON header) atomically."""
         g = self._grid
         meta = {
-            "schema_version": SCHEMA_VERSION, "format": "main-bench-navmesh", "algorithm": ALGORITHM_VERSION,
+            "schema_version": SCHEMA_VERSION, "format": "main-bench-navmesh", "algorithm": self.algorithm_version,
             "settings": self.settings.to_json(), "scene_id": self.scene_id, "scene_hash": self.scene_hash,
             "geometry_hash": self.geometry_hash, "grid": {"x0": g.x0, "y0": g.y0, "cell_size": g.cell_size,
                                                           "nx": g.nx, "ny": g.ny},

@@ -91,6 +91,7 @@ def test_generate_with_every_option(gen, tmp_path, ep_scenes):
     (("--agents", "0,9"), "--agents"), (("--executor", "dask"), "executor"), (("--workers", "0"), "--workers"),
     (("--task", "solo"), "--task"), (("--min-distance", "5", "--max-distance", "3"), "min-distance"),
     (("--scenes", "no/such/dir"), "not found"), (("--up", "x"), "--up"),
+    (("--ratio-threshold", "nan"), "ratio-threshold"),
 ])
 def test_generate_refuses_bad_input(gen, tmp_path, bad, message):
     out = tmp_path / "d"
@@ -117,6 +118,14 @@ def test_scene_without_valid_episodes_is_reported(cli, tmp_path, ep_cache):
     text = cli("episodes", "generate", "--scenes", scene, "--out", out, "--cache-dir", ep_cache, "--per-scene", 40,
                "--agents", "2", "--task", "shared", "--min-island-area", "0.5", "--up", "z")
     assert "shortfall val/closet shared N=2" in text.out and "no target with starts" in text.out
+
+
+def test_scene_with_no_walkable_surface_is_named(cli, tmp_path, ep_cache):
+    scene = write_scene(tmp_path / "s" / "plank.obj", room_meshes(0, 0, 0.3, 4.0))
+    r = cli("episodes", "generate", "--scenes", scene, "--out", tmp_path / "d", "--cache-dir", ep_cache,
+            "--per-scene", 4, "--agents", "2", "--task", "shared", "--up", "z")
+    assert r.code == 2 and len(r.err.strip().splitlines()) == 1, r.err
+    assert str(scene) in r.err and "'plank'" in r.err and "--agent-radius" in r.err
 
 
 def test_worker_count_does_not_change_the_bytes(gen, tmp_path):

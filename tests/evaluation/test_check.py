@@ -41,13 +41,13 @@ def test_good_policy_passes_every_check():
         ("garbage.py:OutOfRange", "actions", "outside the actions 0..3"),
         ("not_a_policy.py", "protocol", "no callable act"),
         ("broken_import.py", "loads", "ImportError"),
-        ("hangs.py", "time_limit", "timeout: act took > 1 s"),
+        ("hangs.py", "time_limit", "timeout: act took > 3 s"),
     ],
 )
 def test_each_problem_fails_its_check(name, failing, words):
     from main_bench.evaluation.isolation import Limits
 
-    settings = CheckSettings(steps=4, width=32, height=32, limits=Limits(step_seconds=1.0))
+    settings = CheckSettings(steps=4, width=32, height=32, limits=Limits(step_seconds=3.0))
     report = check_policy(str(POLICIES / name), settings)
     assert not report.passed
     failed = {c.name: c.message for c in report.failed}
@@ -70,7 +70,8 @@ def test_synthetic_observations_follow_the_space(task, track, goal):
     assert all(space.contains(o) for o in obs.values())
     if goal == "object":
         cats = {info.targets[a].category_id for a in info.agent_ids}
-        assert len(cats) == (1 if task == "shared" else 3) or task == "individual"
+        if task == "shared":
+            assert len(cats) == 1
         assert all(int(o["target"]) == info.targets[a].category_id for a, o in obs.items())
     if goal == "point" and task == "shared":
         assert np.array_equal(obs["agent_0"]["target"], obs["agent_1"]["target"])

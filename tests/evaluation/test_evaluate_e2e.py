@@ -156,6 +156,34 @@ def test_bad_input_is_one_line_exit_2_nothing_written(cli, tiny_dataset, tmp_pat
     assert not (tmp_path / "r").exists()
 
 
+def test_out_that_is_a_file_or_foreign_run_file_is_refused(cli, tiny_dataset, tmp_path):
+    dataset, cache = tiny_dataset
+    base = ("evaluate", "--episodes", dataset, "--split", "val", "--agent", "baseline:random", "--cache-dir", cache)
+    a_file = tmp_path / "results.txt"
+    a_file.write_text("mine")
+    res = cli(*base, "--out", a_file)
+    assert res.code == 2 and "is not a folder" in res.err and a_file.read_text() == "mine"
+    odd = tmp_path / "odd"
+    odd.mkdir()
+    (odd / "run.json").write_text("[]")
+    res = cli(*base, "--out", odd)
+    assert res.code == 2 and "not a main-bench run file" in res.err
+
+
+def test_resume_refuses_a_data_set_regenerated_at_the_same_path(cli, tiny_dataset, tmp_path):
+    dataset, cache = tiny_dataset
+    copy = tmp_path / "data"
+    shutil.copytree(dataset, copy)
+    base = ("evaluate", "--episodes", copy, "--split", "val", "--agent", "baseline:random", "--cache-dir", cache,
+            "--limit", "1", "--out", tmp_path / "r")
+    assert cli(*base).code == 0
+    doc = json.loads((copy / "manifest.json").read_text())
+    doc["shortfalls"] = [*doc.get("shortfalls", []), {"note": "regenerated"}]
+    (copy / "manifest.json").write_text(json.dumps(doc))
+    res = cli(*base)
+    assert res.code == 2 and "differs in manifest_hash" in res.err
+
+
 def test_data_set_from_another_navmesh_algorithm_is_refused(cli, tiny_dataset, tmp_path):
     dataset, cache = tiny_dataset
     copy = tmp_path / "old"
@@ -180,13 +208,13 @@ def _hostile(tmp_path: Path, modes: dict[str, str]) -> str:
 def test_hostile_policy_fails_only_its_episodes_with_the_reason(tiny_dataset, tmp_path):
     ids = [e.episode_id for e in load_episodes(tiny_dataset[0], "val", "shared", 2)]
     modes = dict(zip(ids, ["raise", "ok", "hang", "garbage", "nan", "exit", "memory", "ok"], strict=True))
-    limits = PolicyLimits(step_seconds=3.0, episode_seconds=60.0, memory_mb=384)
+    limits = PolicyLimits(step_seconds=8.0, episode_seconds=60.0, memory_mb=384)
     settings = _settings(tiny_dataset, tmp_path / "out", agent=_hostile(tmp_path, modes), tasks=("shared",),
                          limit=8, chunk_size=8, limits=limits, max_consecutive_failures=8)
     outcome = evaluate(settings)
     team = _frame(settings.out, "records")
     team = team[team["agent_index"] == TEAM].set_index("episode_id")
-    expected = {"raise": "exception: ValueError: policy bug on purpose", "hang": "timeout: act took > 3 s",
+    expected = {"raise": "exception: ValueError: policy bug on purpose", "hang": "timeout: act took > 8 s",
                 "garbage": "invalid_action: agent_0 returned 'left' (str)",
                 "nan": "invalid_action: agent_0 returned nan (float)", "exit": "dead: exit code 3",
                 "memory": "memory: MemoryError in act", "ok": ""}

@@ -17,7 +17,7 @@ from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo, agent_ids
 from main_bench.evaluation.submission import ProtocolError, parse_spec
 
 POLICIES = Path(__file__).parent / "policies"
-FAST = Limits(step_seconds=2.0, reset_seconds=10.0, episode_seconds=60.0, load_seconds=60.0)
+FAST = Limits(step_seconds=10.0, reset_seconds=10.0, episode_seconds=60.0, load_seconds=60.0)
 
 
 def _info(n: int = 3, seed: int = 7) -> EpisodeInfo:
@@ -157,7 +157,7 @@ def test_load_time_limit(tmp_path):
     started = time.monotonic()
     with pytest.raises(PolicyError, match=r"timeout: loading took > 1 s"):
         PolicyProcess(spec, Limits(load_seconds=1.0))
-    assert time.monotonic() - started < 10
+    assert time.monotonic() - started < 30  # the limit, not the minute the policy asked for
 
 
 def test_episode_time_limit_counts_every_step(tmp_path):
@@ -182,6 +182,7 @@ def test_killed_from_outside_is_reported_and_restart_works():
         proc.reset(_info(2))
         old = proc.pid
         os.kill(old, signal.SIGKILL)
+        proc._proc.wait(timeout=10)  # dead before the next call, as under load: the reason must still be right
         with pytest.raises(PolicyError, match=r"dead: killed by signal SIGKILL"):
             proc.act(_obs(agent_ids(2), 8))
         assert not proc.alive

@@ -18,7 +18,7 @@ from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo, agent_ids
 from main_bench.evaluation.submission import parse_spec
 
 POLICIES = Path(__file__).parent / "policies"
-LIMITS = Limits(step_seconds=1.0, reset_seconds=10.0, episode_seconds=60.0, memory_mb=384, load_seconds=60.0)
+LIMITS = Limits(step_seconds=3.0, reset_seconds=10.0, episode_seconds=60.0, memory_mb=384, load_seconds=60.0)
 # Filling memory up to the limit takes time on a busy machine: the hog gets more time so that it meets the
 # memory limit, not the time limit, first.
 HOG_LIMITS = Limits(step_seconds=8.0, reset_seconds=10.0, episode_seconds=60.0, memory_mb=384, load_seconds=60.0)
@@ -36,7 +36,7 @@ def _obs() -> dict:
 
 CASES = [
     ("raises.py", "exception", "exception: ValueError: deliberate failure at step 2 (raises.py:"),
-    ("hangs.py", "timeout", "timeout: act took > 1 s"),
+    ("hangs.py", "timeout", "timeout: act took > 3 s"),
     ("garbage.py", "invalid_action", "invalid_action: agent_0 returned 'x' (str)"),
     ("garbage.py:NotADict", "invalid_action", "not a dict"),
     ("garbage.py:UnknownAgent", "invalid_action", "'agent_9', which is not acting"),
@@ -56,7 +56,7 @@ def test_failure_is_reported_then_restart_works(name, kind, words):
         started = time.monotonic()
         with pytest.raises(PolicyError) as err:
             proc.act(_obs())
-        assert time.monotonic() - started < limits.step_seconds + 5.0
+        assert time.monotonic() - started < limits.step_seconds + 20.0
         assert err.value.kind == kind, err.value.reason
         assert words in err.value.reason
         if kind in ("timeout", "dead", "memory"):
@@ -96,5 +96,5 @@ def test_hang_in_reset_is_a_timeout(tmp_path):
         started = time.monotonic()
         with pytest.raises(PolicyError, match=r"^timeout: reset took > 0.5 s$"):
             proc.reset(INFO)
-        assert time.monotonic() - started < 5.0
+        assert time.monotonic() - started < 30.0
         assert not proc.alive

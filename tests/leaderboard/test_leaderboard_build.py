@@ -187,3 +187,11 @@ def test_hostile_names_are_escaped(tmp_path, episodes_dir):
     readme = report.readme_md.read_text()
     assert "<script>" not in readme and "<javascript:" not in readme
     assert "\\<script\\>" not in readme and "&lt;script&gt;alert(1)&lt;/script&gt;" in readme
+
+
+def test_dollar_signs_in_names_are_text_not_tex(tmp_path, episodes_dir):
+    name = r"Nav $\frac$ v2"
+    r = make_results(tmp_path / "tex", episodes_dir, name, 0.5)
+    report = build_leaderboard([r], tmp_path / "lb", LeaderboardSettings(tables=TableSettings(n_resamples=200)))
+    assert len(report.figure_paths) == 5 and all(p.stat().st_size > 0 for p in report.figure_paths)
+    assert name in set(pd.read_csv(tmp_path / "lb" / "plots" / "section0_methods.csv")["method"])

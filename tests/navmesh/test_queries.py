@@ -114,6 +114,20 @@ def test_save_load_and_build_cache(tmp_path, pillar):
     assert files[0].stat().st_mtime_ns == stamp and second.build_key == first.build_key
     NavMesh.build_cached(FakeScene, NavMeshSettings(agent_radius=0.25), tmp_path / "cache")
     assert len(list((tmp_path / "cache").iterdir())) == 2
+    # A file an older build algorithm wrote is rebuilt, never reused.
+    old = NavMesh.load(files[0])
+    old.algorithm_version -= 1
+    old.save(files[0])
+    assert NavMesh.load(files[0]).build_key != first.build_key
+    third = NavMesh.build_cached(FakeScene, NavMeshSettings(), tmp_path / "cache")
+    assert third.build_key == first.build_key
+    assert NavMesh.load(files[0]).algorithm_version == first.algorithm_version
+
+
+def test_a_grid_too_large_is_refused_naming_the_cell_size():
+    v, f = boxes_mesh([(0, 0, -0.1, 6, 5, 0.0)])
+    with pytest.raises(NavMeshError, match=r"cell_size=0.001 m.*raise --cell-size"):
+        NavMesh.from_triangles(v, f, NavMeshSettings(cell_size=0.001, cell_height=0.001))
 
 
 def test_no_walkable_surface_names_the_settings():

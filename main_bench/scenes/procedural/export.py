@@ -109,10 +109,11 @@ def sidecar_doc(house: House) -> dict[str, Any]:
 def write_house(house: House, out_dir: str | Path) -> Path:
     """Write `<id>.glb` and `<id>.objects.json` into `out_dir` atomically; returns the GLB path.
 
-    The sidecar is written first, so a GLB on disk always has its sidecar beside it.
+    The GLB is written first and the sidecar last: the sidecar's generator version is what marks a cached
+    house as current, so an interrupted write never pairs a new sidecar with an old GLB.
     """
     out = Path(out_dir)
     glb = out / f"{house.house_id}.glb"
-    atomic_write_json(out / f"{house.house_id}.objects.json", sidecar_doc(house))
     atomic_write_bytes(glb, glb_bytes(house))
+    atomic_write_json(out / f"{house.house_id}.objects.json", sidecar_doc(house))
     return glb
