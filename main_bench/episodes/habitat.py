@@ -124,43 +124,61 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
         raise InputError(f"no {SIDECAR}: only Habitat exports written by `main-bench episodes export` can be "
                          "imported (they carry the generation settings and scene hashes)", path=src)
     doc = read_json(side, what="main-bench Habitat export manifest")
-    settings = GenerationSettings.from_json(doc["settings"])
-    ident = identity(settings, doc["navmesh_settings"], doc["scenes"], doc.get("navmesh_algorithm"))
+    try:
+        settings = GenerationSettings.from_json(doc["settings"])
+        ident = identity(settings, doc["navmesh_settings"], doc["scenes"], doc.get("navmesh_algorithm"))
+        shards = list(doc["shards"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DatasetError(f"malformed export manifest ({type(exc).__name__}: {exc}); export again", path=side) from None
     if out.exists() and any(out.iterdir()):
         if not overwrite:
             raise InputError("exists and is not empty; pass --overwrite or choose another --out", path=out)
         if not (out / MANIFEST_NAME).is_file() and not (out / LOCK_NAME).is_file():
             raise InputError("exists and is not a main-bench episode data set; choose a new folder", path=out)
-        import shutil
-
-        for child in out.glob("split=*"):
-            shutil.rmtree(child)
+    # Everything is read and checked before anything is written, so bad input leaves `out` as it was.
     by_shard: dict[str, dict[str, list[dict]]] = defaultdict(lambda: defaultdict(list))
     for f in sorted(src.glob("*_n*/*/*.json.gz")):
         try:
             episodes = json.loads(gzip.decompress(f.read_bytes()))["episodes"]
-        except (OSError, ValueError, KeyError) as exc:
+        except (OSError, ValueError, KeyError, TypeError) as exc:
             raise DatasetError(f"not a Habitat PointNav-v1 file ({exc})", path=f) from None
         for ep in episodes:
-            mb = ep.get("info", {}).get("main_bench")
-            if mb is None:
-                raise DatasetError(f"episode {ep.get('episode_id')!r} has no info.main_bench", path=f)
+            mb = ep.get("info", {}).get("main_bench") if isinstance(ep, dict) else None
+            if not isinstance(mb, dict) or "shard" not in mb or "episode_id" not in mb:
+                raise DatasetError(f"episode {ep.get('episode_id') if isinstance(ep, dict) else ep!r} has no "
+                                   "info.main_bench shard and episode_id", path=f)
             by_shard[mb["shard"]][mb["episode_id"]].append(ep)
-    entries = []
-    for shard in doc["shards"]:
-        eps = by_shard.get(shard["path"], {})
-        table = _shard_table(eps, shard, settings)
-        path = out / shard["path"]
+    missing = set(by_shard) - {s["path"] for s in shards}
+    if missing:
+        raise DatasetError(f"episodes of shards the manifest does not list: {sorted(missing)[:3]}", path=src)
+    tables = []
+    for shard in shards:
+        try:
+            table = _shard_table(by_shard.get(shard["path"], {}), shard, settings)
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            raise DatasetError(f"shard {shard.get('path')!r}: malformed episode ({type(exc).__name__}: {exc})",
+                               path=src) from None
+        if "rows" in shard and table.num_rows != int(shard["rows"]):
+            raise DatasetError(f"shard {shard['path']!r}: the export holds {table.num_rows} whole episodes, its "
+                               f"manifest says {shard['rows']}; export again", path=src)
         report = doc.get("shard_reports", {}).get(shard["path"]) or {
             "requested": shard["requested"], "produced": table.num_rows, "reason": "imported from a Habitat export",
             "rejections": {}}
+        tables.append((shard, table, report))
+    if out.exists():
+        import shutil
+
+        for child in out.glob("split=*"):
+            shutil.rmtree(child)
+    atomic_write_json(out / LOCK_NAME, ident)
+    entries = []
+    for shard, table, report in tables:
+        path = out / shard["path"]
         write_shard(table, path, report)
         entries.append({**shard, "rows": table.num_rows, "sha256": sha256_file(path),
                         "reason": report.get("reason", ""), "rejections": report.get("rejections", {})})
-    missing = set(by_shard) - {s["path"] for s in doc["shards"]}
-    if missing:
-        raise DatasetError(f"episodes of shards the manifest does not list: {sorted(missing)[:3]}", path=src)
     atomic_write_json(out / MANIFEST_NAME, build_manifest(ident, entries))
+    (out / LOCK_NAME).unlink(missing_ok=True)
     return out
 
 

@@ -49,6 +49,25 @@ def test_export_then_import_round_trips(gen, cli, tmp_path, ep_cache):
     again = cli("episodes", "import", hab, "--out", back)
     assert again.code == 2 and "--overwrite" in again.err
 
+    # A damaged export (one agent of a three-agent episode removed) is refused before anything is written.
+    row = next(r for r in table.to_pylist() if r["agents"] == 3)
+    gz = hab / f"{row['task']}_n3" / row["split"] / f"{row['split']}.json.gz"
+    doc = json.loads(gzip.decompress(gz.read_bytes()))
+    doc["episodes"] = [e for e in doc["episodes"] if e["episode_id"] != f"{row['episode_id']}/agent_0"]
+    gz.write_bytes(gzip.compress(json.dumps(doc).encode()))
+    broken = tmp_path / "broken"
+    r = cli("episodes", "import", hab, "--out", broken, "--format", "habitat")
+    assert r.code == 2 and len(r.err.strip().splitlines()) == 1 and "Traceback" not in r.err, r.err
+    assert not broken.exists() or not any(broken.iterdir())
+    before = dataset_bytes(back)
+    r = cli("episodes", "import", hab, "--out", back, "--format", "habitat", "--overwrite")
+    assert r.code == 2 and dataset_bytes(back) == before  # the earlier import is left whole
+    # A whole episode missing is seen too (the export's manifest counts the rows of every shard).
+    gz.write_bytes(gzip.compress(json.dumps({**doc, "episodes": [
+        e for e in doc["episodes"] if not e["episode_id"].startswith(f"{row['episode_id']}/")]}).encode()))
+    r = cli("episodes", "import", hab, "--out", tmp_path / "short", "--format", "habitat")
+    assert r.code == 2 and "whole episodes" in r.err, r.err
+
 
 def test_habitat_yaw_convention():
     # Canonical yaw 0 faces +X; Habitat agents face -Z, and canonical +X is Habitat +X: a -90 deg turn about +Y.
