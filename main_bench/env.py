@@ -159,7 +159,8 @@ class MainParallelEnv(ParallelEnv):
         self._sim = self._resources.simulator(episode.scene_id, episode.num_agents)
         self._fields = self._resources.fields(episode)
         self._targets = target_observations(episode)
-        self._sim.reset(np.asarray(episode.start_positions), np.asarray(episode.start_yaws))
+        self._sim.reset(np.asarray(episode.start_positions), np.asarray(episode.start_yaws),
+                        seed=int(self._rng.integers(2**63)))
         self._collided = np.zeros(episode.num_agents, dtype=bool)
         self._distances = measure_distances(self._fields, self._sim.positions, None)
         self.agents = list(self.possible_agents)

@@ -205,7 +205,8 @@ def run_episode(episode: Episode, sim: Any, fields: list[Any], policy: Any, loop
                        targets=target_infos(episode), max_steps=loop.rules.max_steps,
                        seed=episode_seed(seed, episode.episode_id), extra={"episode_id": episode.episode_id})
     targets = target_observations(episode)
-    sim.reset(np.asarray(episode.start_positions, dtype=np.float64), np.asarray(episode.start_yaws, dtype=np.float64))
+    sim.reset(np.asarray(episode.start_positions, dtype=np.float64), np.asarray(episode.start_yaws, dtype=np.float64),
+              seed=info.seed)
     positions = np.asarray(sim.positions, dtype=np.float64)
     yaws = np.asarray(sim.yaws, dtype=np.float64)
     collided = np.zeros(n, dtype=bool)

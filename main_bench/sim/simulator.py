@@ -90,9 +90,12 @@ class Simulator:
         """Number of wall-probe queries made so far (for profiling)."""
         return self._world.queries
 
-    def reset(self, positions: np.ndarray, yaws: np.ndarray) -> None:
+    def reset(self, positions: np.ndarray, yaws: np.ndarray, seed: int | None = None) -> None:
         """Place N agents: feet positions (N, 3) metres, yaws (N,) radians. Each z is snapped onto the floor
-        under the agent when one lies within max_climb; positions are otherwise taken as given."""
+        under the agent when one lies within max_climb; positions are otherwise taken as given. `seed` reseeds
+        the actuation noise, so an episode's noise does not depend on which episodes this simulator ran before."""
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
         pos = np.array(positions, dtype=np.float64).reshape(-1, 3) if np.size(positions) else np.zeros((0, 3))
         yaw = np.array(yaws, dtype=np.float64).reshape(-1)
         if len(pos) == 0 or len(yaw) != len(pos):

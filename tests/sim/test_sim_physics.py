@@ -186,6 +186,22 @@ def test_noise_is_deterministic_per_seed():
         assert abs(sim.yaws[0] - math.radians(30)) > 1e-6
 
 
+def test_reset_seed_makes_an_episodes_noise_independent_of_earlier_episodes():
+    settings = SimSettings(actuation_noise=0.2, renderer="tiny")
+
+    def episode(sim):
+        sim.reset([[1.0, 2.0, 0.0]], [0.0], seed=42)
+        return [sim.step([1]).moved[0] for _ in range(4)]
+
+    with Simulator(room(), None, settings, seed=1) as fresh:
+        first = episode(fresh)
+    with Simulator(room(), None, settings, seed=1) as used:
+        used.reset([[1.0, 2.0, 0.0]], [0.0])
+        for _ in range(7):
+            used.step([1])
+        assert episode(used) == first
+
+
 def test_agent_body_and_actions_follow_the_settings():
     """Radius, height and max climb from a data set's navmesh settings; step length and turn angle configurable."""
     from main_bench.navmesh import NavMeshSettings
