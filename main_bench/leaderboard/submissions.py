@@ -87,6 +87,11 @@ def load_submission(path: str | Path) -> LoadedSubmission:
     if records.empty or not (records["agent_index"] == TEAM).any():
         raise ResultsError("no team records (agent_index -1) under records/; is the evaluation finished?",
                            path=results.path)
+    doubled = records.duplicated(["episode_id", "agent_index"])
+    if doubled.any():
+        first = records.loc[doubled, "episode_id"].iloc[0]
+        raise ResultsError(f"{int(doubled.sum())} records appear twice (e.g. episode {first!r}); a part file was "
+                           "copied or two runs were merged: evaluate again into a new folder", path=results.path)
     records["agents"] = records["agents"].astype(int)
     records["split"] = records["split"].astype(str)
     records["task"] = records["task"].astype(str)
@@ -104,6 +109,14 @@ def _unique_names(subs: list[LoadedSubmission]) -> list[LoadedSubmission]:
         if counts[sub.name] > 1:
             sub = replace(sub, name=f"{sub.name} ({sub.results_dir.name})")
         out.append(LoadedSubmission(submission=sub, records=s.records))
+    seen: dict[str, Path] = {}
+    for s in out:
+        name = s.submission.name
+        if name in seen:
+            raise ResultsError(f"two submissions are both named {name!r} (also {seen[name]}); give one another "
+                               "name (main-bench evaluate --name, or its submission.json)",
+                               path=s.submission.results_dir)
+        seen[name] = s.submission.results_dir
     return out
 
 

@@ -195,3 +195,25 @@ def test_dollar_signs_in_names_are_text_not_tex(tmp_path, episodes_dir):
     report = build_leaderboard([r], tmp_path / "lb", LeaderboardSettings(tables=TableSettings(n_resamples=200)))
     assert len(report.figure_paths) == 5 and all(p.stat().st_size > 0 for p in report.figure_paths)
     assert name in set(pd.read_csv(tmp_path / "lb" / "plots" / "section0_methods.csv")["method"])
+
+
+def test_same_names_are_told_apart_or_refused(tmp_path, episodes_dir):
+    a = make_results(tmp_path / "runA" / "oracle", episodes_dir, "oracle", 0.9)
+    b = make_results(tmp_path / "runB" / "oracle", episodes_dir, "oracle", 0.2)
+    with pytest.raises(ResultsError, match="both named 'oracle \\(oracle\\)'"):
+        build_leaderboard([a, b], tmp_path / "lb", FAST)
+    c = make_results(tmp_path / "runC" / "other", episodes_dir, "oracle", 0.2)
+    report = build_leaderboard([a, c], tmp_path / "lb2", FAST)
+    board = json.loads(report.leaderboard_json.read_text())
+    names = [s["submission_metadata"]["method_name"] for s in board["sections"][0]["submissions"]]
+    assert names == ["oracle (oracle)", "oracle (other)"]
+    per_track = [len(s["result"]) for s in board["sections"][0]["submissions"]]
+    assert per_track[0] == per_track[1] == len(board["sections"][0]["tracks"])
+
+
+def test_records_that_appear_twice_are_refused(tmp_path, episodes_dir):
+    r = make_results(tmp_path / "dup", episodes_dir, "dup", 0.5)
+    part = sorted((r / "records").rglob("*.parquet"))[0]
+    shutil.copy(part, part.with_name("copied-" + part.name))
+    with pytest.raises(ResultsError, match="appear twice"):
+        build_leaderboard([r], tmp_path / "lb", FAST)
