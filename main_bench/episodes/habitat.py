@@ -102,6 +102,8 @@ def export_habitat(dataset: str | Path, out: str | Path) -> list[Path]:
         data = json.dumps({"episodes": episodes}, separators=(",", ":")).encode()
         atomic_write_bytes(path, gzip.compress(data, mtime=0))
         written.append(path)
+    for stale in sorted(set(out.glob("*_n*/*/*.json.gz")) - set(written)):  # from an earlier export here
+        stale.unlink()
     from .shards import shard_report
 
     side = read_json(Path(dataset) / MANIFEST_NAME, what="episode data set manifest")

@@ -62,6 +62,14 @@ def test_export_then_import_round_trips(gen, cli, tmp_path, ep_cache):
     before = dataset_bytes(back)
     r = cli("episodes", "import", hab, "--out", back, "--format", "habitat", "--overwrite")
     assert r.code == 2 and dataset_bytes(back) == before  # the earlier import is left whole
+    # Exporting a smaller data set into the same folder leaves none of the earlier export's files behind.
+    small = tmp_path / "small"
+    assert gen(small, "--agents", "1", "--shard-size", "4", per_scene=4).code == 0
+    assert cli("episodes", "export", small, "--out", hab, "--format", "habitat").code == 0
+    assert {f.parent.parent.name for f in hab.rglob("*.json.gz")} == {"individual_n1", "shared_n1"}
+    row = load_table(small).to_pylist()[0]
+    gz = hab / f"{row['task']}_n1" / row["split"] / f"{row['split']}.json.gz"
+    doc = json.loads(gzip.decompress(gz.read_bytes()))
     # A whole episode missing is seen too (the export's manifest counts the rows of every shard).
     gz.write_bytes(gzip.compress(json.dumps({**doc, "episodes": [
         e for e in doc["episodes"] if not e["episode_id"].startswith(f"{row['episode_id']}/")]}).encode()))
