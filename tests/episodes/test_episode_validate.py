@@ -140,3 +140,12 @@ def test_not_a_data_set_is_an_input_error(cli, tmp_path, data):
     (data / "manifest.json").write_text(json.dumps(doc))
     r = cli("episodes", "validate", data)
     assert r.code == 2 and "manifest.json" in r.err and len(r.err.strip().splitlines()) == 1
+
+
+def test_recheck_names_a_navmesh_algorithm_change(cli, data, ep_cache):
+    doc = json.loads((data / "manifest.json").read_text())
+    doc["navmesh_algorithm"] = int(doc["navmesh_algorithm"]) + 1
+    (data / "manifest.json").write_text(json.dumps(doc))
+    assert _validate(cli, data)[0] == 0  # the data set itself is sound
+    code, report = _validate(cli, data, "--recheck", "--cache-dir", ep_cache)
+    assert code == 1 and report["problem_counts"].get("navmesh_algorithm") == 1
