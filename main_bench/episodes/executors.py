@@ -11,7 +11,7 @@ from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
-from ..errors import InputError
+from ..errors import InputError, MainBenchError
 
 Unit = Callable[[dict[str, Any]], list[dict[str, Any]]]
 
@@ -43,7 +43,11 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick:
             finished, pending = wait(pending, return_when=FIRST_COMPLETED)
             for fut in finished:
                 i = futures[fut]
-                results[i] = fut.result()
+                try:
+                    results[i] = fut.result()
+                except BaseException:
+                    pool.shutdown(wait=True, cancel_futures=True)  # queued units never start
+                    raise
                 tick(sizes[i])
     return results
 
@@ -72,7 +76,15 @@ def _run_ray(fn: Unit, specs: list[dict], sizes: list[int], address: str | None,
             done, pending = ray.wait(pending, num_returns=1)
             for ref in done:
                 i = index[ref]
-                results[i] = ray.get(ref)
+                try:
+                    results[i] = ray.get(ref)
+                except Exception as exc:
+                    for other in pending:
+                        ray.cancel(other, force=True)
+                    cause = getattr(exc, "cause", None)  # a RayTaskError wraps the unit's own exception
+                    if isinstance(cause, MainBenchError):
+                        raise cause from None
+                    raise
                 tick(sizes[i])
         return results
     finally:

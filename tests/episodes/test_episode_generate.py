@@ -120,10 +120,16 @@ def test_scene_without_valid_episodes_is_reported(cli, tmp_path, ep_cache):
     assert "shortfall val/closet shared N=2" in text.out and "no target with starts" in text.out
 
 
-def test_scene_with_no_walkable_surface_is_named(cli, tmp_path, ep_cache):
-    scene = write_scene(tmp_path / "s" / "plank.obj", room_meshes(0, 0, 0.3, 4.0))
-    r = cli("episodes", "generate", "--scenes", scene, "--out", tmp_path / "d", "--cache-dir", ep_cache,
-            "--per-scene", 4, "--agents", "2", "--task", "shared", "--up", "z")
+@pytest.mark.parametrize("executor", ["local", "ray"])
+def test_scene_with_no_walkable_surface_is_named(cli, tmp_path, ep_cache, executor, request):
+    if executor == "ray":
+        request.getfixturevalue("local_ray")
+    folder = tmp_path / "s"
+    write_scene(folder / "a_room.obj", room_meshes(0, 0, 5.0, 4.0))
+    scene = write_scene(folder / "plank.obj", room_meshes(0, 0, 0.3, 4.0))
+    r = cli("episodes", "generate", "--scenes", folder, "--out", tmp_path / "d", "--cache-dir", ep_cache,
+            "--per-scene", 4, "--agents", "2", "--task", "shared", "--up", "z", "--workers", "2",
+            "--executor", executor)
     assert r.code == 2 and len(r.err.strip().splitlines()) == 1, r.err
     assert str(scene) in r.err and "'plank'" in r.err and "--agent-radius" in r.err
 
