@@ -18,6 +18,22 @@ CLI_JSON_SCHEMA_VERSION = 1
 
 JsonOption = typer.Option(False, "--json", help="Print a machine-readable JSON document instead of text.")
 
+#: Options shared by the commands that load scene files and build navmeshes (defaults: NavMeshSettings').
+UpOption = typer.Option("auto", "--up", help="Up axis of scene files: y, z or auto (glTF is +Y by its spec).")
+ScaleOption = typer.Option(None, "--scale", help="Metres per file unit (default: detect cm/mm from the size).")
+AgentRadiusOption = typer.Option(0.18, "--agent-radius", help="Navmesh: agent radius (m).")
+AgentHeightOption = typer.Option(1.5, "--agent-height", help="Navmesh: agent height (m).")
+MaxClimbOption = typer.Option(0.2, "--max-climb", help="Navmesh: highest step the agent climbs (m).")
+MaxSlopeOption = typer.Option(45.0, "--max-slope", help="Navmesh: steepest walkable slope (degrees).")
+CellSizeOption = typer.Option(0.05, "--cell-size", help="Navmesh: grid cell size (m).")
+
+
+def check_up(up: str) -> str:
+    """`--up` as given, or `InputError` unless it is y, z or auto."""
+    if up not in ("y", "z", "auto"):
+        raise InputError(f"--up must be y, z or auto, got {up!r}")
+    return up
+
 
 def emit(command: str, payload: dict[str, Any], as_json: bool, render: Callable[[dict[str, Any]], str]) -> None:
     """Print `payload` as versioned JSON (`--json`) or as the text `render` makes of it."""

@@ -145,7 +145,7 @@ def register(app: typer.Typer) -> None:
         as_json: bool = JsonOption,
     ) -> None:
         """Run every stage end to end on built-in houses and say where the outputs are."""
-        settings = DemoSettings(out=out, episodes=episodes, houses=houses, per_scene=per_scene, limit=limit, workers=workers,
-                                renderer=renderer, seed=seed)
+        settings = DemoSettings(out=out, episodes=episodes, houses=houses, per_scene=per_scene, limit=limit,
+                                workers=workers, renderer=renderer, seed=seed)
         result = run_demo(settings, log=(lambda _m: None) if as_json else lambda m: typer.echo(m, err=True))
         emit("demo", result, as_json, _render)

@@ -7,7 +7,19 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from .common import JsonOption, emit, parse_int_list, progress
+from .common import (
+    AgentHeightOption,
+    AgentRadiusOption,
+    CellSizeOption,
+    JsonOption,
+    MaxClimbOption,
+    MaxSlopeOption,
+    UpOption,
+    check_up,
+    emit,
+    parse_int_list,
+    progress,
+)
 
 app = typer.Typer(help="Generate, validate, export and import episode data sets.", no_args_is_help=True)
 
@@ -61,12 +73,12 @@ def generate(
     ray_address: str | None = typer.Option(None, "--ray-address", help="Ray cluster address (default: local)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing data set at --out."),
     cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache of built-in houses and navmeshes."),
-    up: str = typer.Option("auto", "--up", help="Up axis of scene files: y, z or auto."),
-    agent_radius: float = typer.Option(0.18, "--agent-radius", help="Navmesh agent radius (m)."),
-    agent_height: float = typer.Option(1.5, "--agent-height", help="Navmesh agent height (m)."),
-    max_climb: float = typer.Option(0.2, "--max-climb", help="Navmesh max step height (m)."),
-    max_slope: float = typer.Option(45.0, "--max-slope", help="Navmesh max slope (degrees)."),
-    cell_size: float = typer.Option(0.05, "--cell-size", help="Navmesh cell size (m)."),
+    up: str = UpOption,
+    agent_radius: float = AgentRadiusOption,
+    agent_height: float = AgentHeightOption,
+    max_climb: float = MaxClimbOption,
+    max_slope: float = MaxSlopeOption,
+    cell_size: float = CellSizeOption,
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
     as_json: bool = JsonOption,
 ) -> None:
@@ -76,8 +88,7 @@ def generate(
     from ..episodes.sources import resolve_sources
     from ..navmesh import NavMeshSettings
 
-    if up not in ("y", "z", "auto"):
-        raise InputError(f"--up must be y, z or auto, got {up!r}")
+    check_up(up)
     width, height = _camera_size(camera)
     settings = GenerationSettings(
         tasks=_tasks(task), agents=parse_int_list(agents, "--agents", 1, 8), per_scene=per_scene,

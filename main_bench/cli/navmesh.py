@@ -9,7 +9,19 @@ from typing import Any
 import typer
 
 from ..errors import InputError
-from .common import JsonOption, emit, parse_vec3
+from .common import (
+    AgentHeightOption,
+    AgentRadiusOption,
+    CellSizeOption,
+    JsonOption,
+    MaxClimbOption,
+    MaxSlopeOption,
+    ScaleOption,
+    UpOption,
+    check_up,
+    emit,
+    parse_vec3,
+)
 
 app = typer.Typer(help="Build navmeshes and query geodesic distances.", no_args_is_help=True)
 
@@ -26,13 +38,13 @@ def build(
     out: Path = typer.Option(
         ..., "--out", "-o", help="Navmesh file to write (reused if built from the same inputs)."
     ),
-    up: str = typer.Option("auto", "--up", help="Up axis of the file: y, z or auto."),
-    scale: float | None = typer.Option(None, "--scale", help="Metres per file unit (default: detect)."),
-    agent_radius: float = typer.Option(0.18, "--agent-radius", help="Agent radius (m)."),
-    agent_height: float = typer.Option(1.5, "--agent-height", help="Agent height (m)."),
-    max_climb: float = typer.Option(0.2, "--max-climb", help="Highest step the agent climbs (m)."),
-    max_slope: float = typer.Option(45.0, "--max-slope", help="Steepest walkable slope (degrees)."),
-    cell_size: float = typer.Option(0.05, "--cell-size", help="Grid cell size (m)."),
+    up: str = UpOption,
+    scale: float | None = ScaleOption,
+    agent_radius: float = AgentRadiusOption,
+    agent_height: float = AgentHeightOption,
+    max_climb: float = MaxClimbOption,
+    max_slope: float = MaxSlopeOption,
+    cell_size: float = CellSizeOption,
     cell_height: float = typer.Option(0.05, "--cell-height", help="Vertical resolution (m)."),
     region_min_size: float = typer.Option(0.05, "--region-min-size", help="Smallest island kept (m^2)."),
     force: bool = typer.Option(
@@ -45,8 +57,7 @@ def build(
 
     from ..navmesh import NavMesh, NavMeshSettings
 
-    if up not in ("y", "z", "auto"):
-        raise InputError(f"--up must be y, z or auto, got {up!r}")
+    check_up(up)
     settings = NavMeshSettings(agent_radius=agent_radius, agent_height=agent_height, max_climb=max_climb,
                                max_slope=max_slope, cell_size=cell_size, cell_height=cell_height,
                                region_min_size=region_min_size)  # fmt: skip

@@ -7,12 +7,10 @@ from pathlib import Path
 
 import typer
 
-from .common import JsonOption, emit
+from .common import JsonOption, ScaleOption, UpOption, emit
 
 app = typer.Typer(help="Inspect scenes; generate and preview built-in procedural houses.", no_args_is_help=True)
 
-UpOption = typer.Option("auto", "--up", help="Up axis of the file: y, z or auto (glTF is +Y by its spec).")
-ScaleOption = typer.Option(None, "--scale", help="Metres per file unit (default: detect cm/mm from the size).")
 
 
 @app.command("info")

@@ -63,6 +63,15 @@ class Manifest:
     manifest_hash: str
     navmesh_algorithm: int | None = None
 
+    def navmesh_mismatch(self) -> str:
+        """Why the data set's distances are not this toolkit's navmesh's ('' when they are): it was made with
+        another navmesh algorithm version."""
+        from ..navmesh.build import ALGORITHM_VERSION
+
+        if self.navmesh_algorithm in (None, ALGORITHM_VERSION):
+            return ""
+        return f"made with navmesh algorithm {self.navmesh_algorithm}, this main-bench has {ALGORITHM_VERSION}"
+
     @property
     def goal_radius(self) -> float:
         """Goal radius of object targets (metres)."""

@@ -212,12 +212,10 @@ def validate_dataset(dataset: str | Path, *, recheck: bool = False, sample: int 
     check_duplicates(ids, shard_of, report)
     check_stray_files(root, manifest, report)
     if recheck:
-        from ..navmesh.build import ALGORITHM_VERSION
         from .recheck import recheck_distances
 
-        if manifest.navmesh_algorithm not in (None, ALGORITHM_VERSION):
-            report.add("navmesh_algorithm", f"made with navmesh algorithm {manifest.navmesh_algorithm}, this "
-                       f"main-bench has {ALGORITHM_VERSION}: its distances are not this toolkit's; regenerate it")
-
+        mismatch = manifest.navmesh_mismatch()
+        if mismatch:
+            report.add("navmesh_algorithm", f"{mismatch}: its distances are not this toolkit's; regenerate it")
         recheck_distances(manifest, readable, report, sample=sample, cache_dir=cache_dir)
     return report

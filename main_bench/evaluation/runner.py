@@ -59,14 +59,11 @@ class EvaluationOutcome:
 def check_navmesh_algorithm(manifest: Any) -> None:
     """Refuse a data set whose distances came from another navmesh algorithm than this toolkit's: its shortest
     paths (SPL's l_i) and today's distances to goal would not agree."""
-    from ..navmesh.build import ALGORITHM_VERSION
-
-    made_with = manifest.navmesh_algorithm
-    if made_with is not None and made_with != ALGORITHM_VERSION:
-        raise DatasetError(f"made with navmesh algorithm {made_with}, this main-bench has {ALGORITHM_VERSION}, so "
-                           "its distances would not match the evaluator's; regenerate it (main-bench episodes "
-                           "generate ... --overwrite) or evaluate with the main-bench version that made it",
-                           path=manifest.root)
+    mismatch = manifest.navmesh_mismatch()
+    if mismatch:
+        raise DatasetError(f"{mismatch}, so its distances would not match the evaluator's; regenerate it "
+                           "(main-bench episodes generate ... --overwrite) or evaluate with the main-bench version "
+                           "that made it", path=manifest.root)
 
 
 def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:

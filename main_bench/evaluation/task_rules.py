@@ -2,8 +2,8 @@
 
 Every submission is scored with the data set's own values: agent radius, height and max climb (its navmesh
 settings), success distance, max steps per agent, the actions' step and turn, and the camera (its generation
-settings; a manifest from before these were recorded gets DESIGN.md's defaults: 500 steps, 0.25 m, 30 deg,
-128 x 128, hfov 90 deg at 1.25 m, depth to 10 m).
+settings; reading a manifest written before these were recorded fills in `GenerationSettings`' defaults,
+DESIGN.md's: 500 steps, 0.25 m, 30 deg, 128 x 128, hfov 90 deg at 1.25 m, depth to 10 m).
 """
 
 from __future__ import annotations
@@ -12,13 +12,10 @@ from typing import Any
 
 from ..sim.task import TaskRules
 
-#: DESIGN.md's default max steps per agent, used when a manifest records none.
-DEFAULT_MAX_STEPS = 500
-
 
 def max_steps_of(manifest: Any) -> int:
-    """Max steps per agent recorded in the manifest's generation settings, else `DEFAULT_MAX_STEPS`."""
-    return int(getattr(manifest.settings, "max_steps", DEFAULT_MAX_STEPS) or DEFAULT_MAX_STEPS)
+    """Max steps per agent recorded in the manifest's generation settings."""
+    return int(manifest.settings.max_steps)
 
 
 def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
@@ -31,20 +28,13 @@ def sim_settings_from_manifest(manifest: Any, renderer: str) -> Any:
     chosen renderer."""
     from ..sim.settings import CameraSettings, SimSettings
 
-    nav = manifest.navmesh()
     gen = manifest.settings
-    default_cam = CameraSettings()
-    camera = CameraSettings(
-        width=int(getattr(gen, "camera_width", default_cam.width)),
-        height=int(getattr(gen, "camera_height", default_cam.height)),
-        hfov_deg=float(getattr(gen, "camera_hfov_deg", default_cam.hfov_deg)),
-        height_m=float(getattr(gen, "camera_height_m", default_cam.height_m)),
-        max_depth=float(getattr(gen, "max_depth", default_cam.max_depth)))
-    defaults = SimSettings()
-    return SimSettings(agent_radius=float(nav.agent_radius), agent_height=float(nav.agent_height),
-                       max_climb=float(nav.max_climb), renderer=renderer, camera=camera,
-                       forward_step=float(getattr(gen, "forward_step", defaults.forward_step)),
-                       turn_angle_deg=float(getattr(gen, "turn_angle_deg", defaults.turn_angle_deg)))
+    camera = CameraSettings(width=int(gen.camera_width), height=int(gen.camera_height),
+                            hfov_deg=float(gen.camera_hfov_deg), height_m=float(gen.camera_height_m),
+                            max_depth=float(gen.max_depth))
+    return SimSettings.for_agent_body(manifest.navmesh(), renderer=renderer, camera=camera,
+                                      forward_step=float(gen.forward_step),
+                                      turn_angle_deg=float(gen.turn_angle_deg))
 
 
 def rules_json(manifest: Any) -> dict[str, Any]:

@@ -7,7 +7,8 @@ last free fraction is refined by bisection to BISECT_TOL_M. At each checked posi
 (closed form, done first because it is cheapest), the floor under the centre within max_climb of the previous
 position (a vertical ray), the wall probe (no overlap beyond OVERLAP_TOL_M, or no more than at the start plus
 SLIDE_TOL_M, so an agent the navmesh placed a little into a wall can still slide along it or move away, never
-deeper), and, when a navmesh is given and the start is on it, the navmesh. Moving agents see the others where they are now: agents move in index order within a step.
+deeper), and, when a navmesh is given and the start is on it, the navmesh. Moving agents see the others where
+they are now: agents move in index order within a step.
 """
 
 from __future__ import annotations
