@@ -71,7 +71,6 @@ class MainParallelEnv(ParallelEnv):
         from .episodes.dataset import load_episodes, read_manifest
         from .evaluation.resources import EpisodeResources
         from .evaluation.task_rules import max_steps_of, sim_settings_from_manifest
-        from .sim.settings import CameraSettings
 
         if track not in TRACKS:
             raise InputError(f"track must be one of {', '.join(TRACKS)}, got {track!r}")
@@ -105,7 +104,7 @@ class MainParallelEnv(ParallelEnv):
         self.reward_settings = reward or RewardSettings()
         sim_settings = sim_settings_from_manifest(self.manifest, renderer)
         if image_size is not None:
-            sim_settings = replace(sim_settings, camera=replace(CameraSettings(), width=int(image_size),
+            sim_settings = replace(sim_settings, camera=replace(sim_settings.camera, width=int(image_size),
                                                                 height=int(image_size)))
         self.sim_settings = sim_settings
         self.max_steps = int(max_steps or max_steps_of(self.manifest))

@@ -127,3 +127,19 @@ def test_render_and_bad_input(tiny_dataset):
     with pytest.raises(InputError, match="finite"):
         RewardSettings(step_penalty=math.inf)
     assert np.isfinite(RewardSettings().success_bonus)
+
+
+def test_image_size_changes_only_the_size_of_the_data_sets_camera(tiny_dataset, tmp_path):
+    import json
+    import shutil
+
+    dataset, cache = tiny_dataset
+    copy = tmp_path / "data"
+    shutil.copytree(dataset, copy)
+    doc = json.loads((copy / "manifest.json").read_text())
+    doc["settings"].update(camera_hfov_deg=70.0, max_depth=6.0)
+    (copy / "manifest.json").write_text(json.dumps(doc))
+    env = create(copy, "val", cache_dir=cache, image_size=SMALL)
+    cam = env.sim_settings.camera
+    assert (cam.width, cam.height, cam.hfov_deg, cam.max_depth) == (SMALL, SMALL, 70.0, 6.0)
+    assert env.observation_space(env.possible_agents[0])["depth"].high.max() == 6.0
