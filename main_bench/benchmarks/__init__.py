@@ -4,8 +4,39 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import platform
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
+
+
+def real_scenes_folder() -> Path:
+    """The shared real scene meshes: `MAIN_BENCH_REAL_SCENES`, else `../shared/scenes` beside the checkout.
+    The benchmarks that use them skip those scenes when the folder is absent."""
+    env = os.environ.get("MAIN_BENCH_REAL_SCENES")
+    return Path(env) if env else Path(__file__).resolve().parents[2].parent / "shared" / "scenes"
+
+
+def usable_cpus() -> int:
+    """CPUs this process may run on (its affinity set where the OS has one)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def _load() -> float | None:
+    return round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None
+
+
+def machine_info(**extra: Any) -> dict[str, Any]:
+    """The machine as a benchmark result records it, with the 1-minute load average now; `machine_done` adds
+    the load at the end (this machine may be shared, and wall times follow its load)."""
+    return {"cpus": usable_cpus(), "platform": platform.platform(), "processor": platform.machine(),
+            "python": platform.python_version(), **extra, "load_average_1min_at_start": _load()}
+
+
+def machine_done(machine: dict[str, Any]) -> dict[str, Any]:
+    """`machine` with the 1-minute load average at the end of the run."""
+    return {**machine, "load_average_1min_at_end": _load()}
 
 
 def tool_main(description: str, quick_help: str, run: Callable[..., dict[str, Any]],

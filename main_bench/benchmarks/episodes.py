@@ -16,7 +16,6 @@ Memory: peak resident set size of this process and of the worker processes (MiB)
 
 from __future__ import annotations
 
-import platform
 import resource
 import shutil
 import statistics
@@ -25,6 +24,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from . import machine_done, machine_info
 
 AGENTS = 3
 CORE_HOUSE = "house_0005"
@@ -180,6 +181,7 @@ def run(quick: bool = False) -> dict:
     from ..navmesh import NavMesh, NavMeshSettings
     from ..scenes import builtin, load_scene
 
+    machine = machine_info()
     cache = Path(builtin.default_cache_dir())
     ids = _houses(quick)
     paths, prebuild_s = _prebuild(ids, cache)
@@ -195,14 +197,8 @@ def run(quick: bool = False) -> dict:
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     return {
-        "machine": {"cpus": _cpus(), "python": platform.python_version(), "processor": platform.machine()},
+        "machine": machine_done(machine),
         "task": f"shared target, {AGENTS} agents, 2-20 m, default checks", "core_house": CORE_HOUSE,
         "navmesh_prebuild_s": round(prebuild_s, 1), "core": core, "naive_networkx": naive,
         "core_over_naive": None if ratio is None else round(ratio), "scale": scale, "memory": _peak_mib(),
     }
-
-
-def _cpus() -> int:
-    import os
-
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)

@@ -12,8 +12,6 @@ navmesh of the shared scenes.
 
 from __future__ import annotations
 
-import os
-import platform
 import statistics
 import tempfile
 import time
@@ -24,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..navmesh import NavMesh, NavMeshSettings
+from . import machine_done, machine_info, real_scenes_folder
 
 #: The bar of issue 3.
 GOAL_BUILD_S = 1.0
@@ -46,11 +45,6 @@ def _median_times(fn: Callable[[], Any], repeats: int) -> tuple[float, float, An
         cpu.append(time.process_time() - c)
         wall.append(time.perf_counter() - t)
     return statistics.median(wall), statistics.median(cpu), out
-
-
-def _real_scenes() -> Path:
-    env = os.environ.get("MAIN_BENCH_REAL_SCENES")
-    return Path(env) if env else Path(__file__).resolve().parents[3] / "shared" / "scenes"
 
 
 def _graph_edges(nm: NavMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -162,11 +156,11 @@ def run(quick: bool = False) -> dict[str, Any]:
     from ..scenes import load_scene
     from ..scenes.procedural import generate_house, write_house
 
-    load0 = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+    machine = machine_info()
     rng = np.random.default_rng(0)
     settings = NavMeshSettings()
     builds, fields = [], []
-    folder = _real_scenes()
+    folder = real_scenes_folder()
     house_glb = folder / "aws_small_house_collision_yup.glb"
     with tempfile.TemporaryDirectory() as tmp:
         scenes: list[tuple[str, Any]] = []
@@ -196,13 +190,7 @@ def run(quick: bool = False) -> dict[str, Any]:
         "lookups_per_s>=1e6": all(f["lookups_per_s"] >= GOAL_LOOKUPS_PER_S for f in fields),
     }
     return {
-        "machine": {
-            "cpus": os.cpu_count(),
-            "platform": platform.platform(),
-            "python": platform.python_version(),
-            "load_average_1min_at_start": load0,
-            "load_average_1min_at_end": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
-        },
+        "machine": machine_done(machine),
         "quick": quick,
         "builds": builds,
         "fields": fields,

@@ -15,7 +15,6 @@ and CPU time (all threads of this process) is reported next to wall time because
 from __future__ import annotations
 
 import os
-import platform
 import statistics
 import tempfile
 import time
@@ -28,6 +27,7 @@ import numpy as np
 from ..scenes.loader import Scene, load_scene
 from ..sim import SimSettings, Simulator
 from ..sim.synthetic import box_house
+from . import machine_done, machine_info, real_scenes_folder
 
 AGENTS = 3
 BACKENDS = ("gl", "tiny")
@@ -43,8 +43,7 @@ def _scenes(quick: bool, workdir: Path) -> list[tuple[str, Scene]]:
     if not quick:
         out.append(("builtin house_0001 (two storeys)", load_scene(write_house(generate_house(1), workdir))))
         out.append(("synthetic box_house", box_house(0)))
-        real = os.environ.get("MAIN_BENCH_REAL_SCENES") or str(Path(__file__).resolve().parents[3] / "shared" / "scenes")
-        house = Path(real) / "aws_small_house_visual_yup.glb"
+        house = real_scenes_folder() / "aws_small_house_visual_yup.glb"
         if house.is_file():
             out.append(("aws_small_house_visual (real, furnished)", load_scene(house)))
     return out
@@ -135,17 +134,11 @@ def _verdict(row: dict) -> None:
         row["meets_5x_tiny"] = row["gl_over_tiny"] >= GOAL_OVER_TINY
 
 
-def _machine() -> dict:
-    return {"cpus": os.cpu_count(), "platform": platform.platform(), "processor": platform.processor(),
-            "python": platform.python_version(), "LP_NUM_THREADS": os.environ.get("LP_NUM_THREADS"),
-            "load_average_1min_at_start": round(os.getloadavg()[0], 2)}
-
-
 def run(quick: bool = False, *, steps: int | None = None, repeats: int | None = None) -> dict:
     """Time both backends side by side on each scene; returns a JSON-ready dict (figures are medians)."""
     steps = steps or (60 if quick else 200)
     repeats = repeats or (3 if quick else 5)
-    machine = _machine()
+    machine = machine_info(LP_NUM_THREADS=os.environ.get("LP_NUM_THREADS"))
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, scene in _scenes(quick, Path(tmp)):
@@ -155,13 +148,12 @@ def run(quick: bool = False, *, steps: int | None = None, repeats: int | None = 
             row.update(time_backends(scene, nm, starts, steps, repeats))
             _verdict(row)
             results.append(row)
-    machine["load_average_1min_at_end"] = round(os.getloadavg()[0], 2)
     return {
         "benchmark": "sim",
         "quick": quick,
         "camera": "128x128 RGB-D, hfov 90",
         "goal": {"agent_steps_per_s": GOAL_AGENT_STEPS_PER_S, "fastest_over_tiny": GOAL_OVER_TINY},
-        "machine": machine,
+        "machine": machine_done(machine),
         "results": results,
     }
 
