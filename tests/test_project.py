@@ -36,3 +36,66 @@ def test_ruff_is_clean():
     proc = subprocess.run([ruff, "check", "main_bench", "tests", "tools"], cwd=REPO, capture_output=True, text=True,
                           check=False)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+#: Third-party modules that only optional extras provide: main_bench imports them inside the functions that need
+#: them, and each must be declared by an extra. Everything else main_bench imports must be a base requirement.
+EXTRA_MODULES = {"ray": "ray", "torch": "torch", "networkx": "bench", "tensorboard": "train"}
+
+
+def _requirement_names(requirements: list[str]) -> set[str]:
+    return {_norm(re.split(r"[\s<>=!~;\[(]", r.strip(), maxsplit=1)[0]) for r in requirements}
+
+
+def _norm(name: str) -> str:
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def _third_party_imports() -> dict[str, set[str]]:
+    """{top-level module: files of main_bench importing it} for every absolute non-stdlib import."""
+    import ast
+    import sys
+
+    found: dict[str, set[str]] = {}
+    for path in sorted((REPO / "main_bench").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                top = name.split(".")[0]
+                if top not in sys.stdlib_module_names and top != "main_bench":
+                    found.setdefault(top, set()).add(str(path.relative_to(REPO)))
+    return found
+
+
+def test_every_third_party_import_is_a_declared_requirement():
+    import tomllib
+    from importlib.metadata import packages_distributions
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    base = _requirement_names(project["dependencies"])
+    extras = {name: _requirement_names(reqs) for name, reqs in project["optional-dependencies"].items()}
+    dists = packages_distributions()
+    problems = []
+    for module, files in sorted(_third_party_imports().items()):
+        if module in EXTRA_MODULES:
+            extra = EXTRA_MODULES[module]
+            if _norm(module) not in extras.get(extra, set()):
+                problems.append(f"{module} (imported by {sorted(files)}) is not declared by the [{extra}] extra")
+            continue
+        owners = {_norm(d) for d in dists.get(module, [module])}
+        if not owners & base:
+            problems.append(f"{module} (imported by {sorted(files)}) is not a base requirement of pyproject.toml")
+    assert not problems, "\n".join(problems)
+
+
+def test_ci_runs_both_readme_commands_in_fresh_environments():
+    ci = (REPO / ".ci" / "run").read_text(encoding="utf-8")
+    demo, tests = _quick_start_commands()
+    lines = [line.strip() for line in ci.splitlines()]
+    assert demo in lines and tests in lines, (demo, tests)
+    assert ci.count("-m venv") >= 2, "each README command runs in its own fresh virtual environment"

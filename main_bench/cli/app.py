@@ -6,9 +6,9 @@ traceback is shown only with `--debug`.
 
 from __future__ import annotations
 
+import importlib
 import sys
 
-import click
 import typer
 
 from .. import __version__
@@ -55,16 +55,17 @@ _register()
 
 
 def _cli_exceptions() -> tuple[tuple[type, ...], tuple[type, ...], tuple[type, ...], tuple[type, ...]]:
-    """(exit, abort, usage, other click errors) classes of click and of the copy of click typer may bundle."""
-    modules = [click.exceptions]
-    try:
-        import typer._click.exceptions as bundled
-
-        modules.append(bundled)
-    except ImportError:
-        pass
-    exits = (click.exceptions.Exit, typer.Exit)
-    aborts = (click.exceptions.Abort, typer.Abort)
+    """(exit, abort, usage, other click errors) classes of the click typer uses: its bundled copy (typer >= 0.29,
+    no `click` package needed) and the separate `click` package where one is installed."""
+    modules = []
+    for name in ("typer._click.exceptions", "click.exceptions"):
+        try:
+            modules.append(importlib.import_module(name))
+        except ImportError:
+            continue
+    assert modules, "typer without any click: unsupported typer version"
+    exits = (typer.Exit, *(m.Exit for m in modules if hasattr(m, "Exit")))
+    aborts = (typer.Abort, *(m.Abort for m in modules if hasattr(m, "Abort")))
     usage = tuple(m.UsageError for m in modules)
     other = tuple(m.ClickException for m in modules)
     return exits, aborts, usage, other
