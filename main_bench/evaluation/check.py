@@ -7,6 +7,7 @@ drawn from `observation_space` with a seeded generator. The report is a list of 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 from dataclasses import asdict, dataclass, field
@@ -17,6 +18,8 @@ import numpy as np
 from ..errors import InputError, SubmissionError
 from ..scenes.objects import KNOWN_CATEGORIES
 from .isolation import Limits, PolicyError, PolicyProcess
+from .isolation_check import Trap
+from .sandbox import SandboxSettings
 from .protocol import TRACKS, EpisodeInfo, TargetInfo, agent_ids, observation_space
 from .submission import PolicySpec, ProtocolError, parse_spec
 
@@ -41,6 +44,7 @@ class CheckSettings:
     max_depth: float = 10.0
     max_steps: int = 500
     limits: Limits = field(default_factory=Limits)
+    sandbox: SandboxSettings = field(default_factory=SandboxSettings)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.agents, int) and 1 <= self.agents <= 16):
@@ -138,7 +142,8 @@ def check_policy(spec: str | PolicySpec, settings: CheckSettings | None = None) 
     script = _script(settings, info)
     results: dict[str, CheckResult] = {}
 
-    first = _run(policy_spec, settings, info, script, results, record=True)
+    with Trap() as trap:
+        first = _run(policy_spec, settings, info, script, results, record=True, trap=trap)
     if first is not None:
         again: dict[str, CheckResult] = {}
         second = _run(policy_spec, settings, info, script, again, record=False)
@@ -160,15 +165,21 @@ def _script(settings: CheckSettings, info: EpisodeInfo) -> list[dict[str, dict[s
 
 
 def _run(spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo, script: list[dict[str, dict]],
-         results: dict[str, CheckResult], record: bool) -> list[dict[str, int]] | None:
-    """Load, reset and play the script once; with `record`, fill `results` for the checks it decides."""
+         results: dict[str, CheckResult], record: bool, trap: Trap | None = None) -> list[dict[str, int]] | None:
+    """Load, reset and play the script once; with `record`, fill `results` for the checks it decides; with a
+    `trap`, run the policy among its bait and decide the isolation check (even when another check fails)."""
 
     def put(name: str, status: Status, message: str) -> None:
         if record:
             results[name] = CheckResult(name, status, message)
 
+    sandbox = trap.sandbox_for(settings.sandbox, str(spec)) if trap is not None else settings.sandbox
     try:
-        process = PolicyProcess(spec, settings.limits, settings.seed)
+        try:
+            process = PolicyProcess(spec, settings.limits, settings.seed, sandbox)
+        finally:
+            if trap is not None:
+                results["isolation"] = _isolation(trap.verdict(None, spec.root), settings.sandbox, skip=True)
     except ProtocolError as exc:
         put("loads", "pass", "the submission imports and builds")
         put("protocol", "fail", str(exc))
@@ -183,51 +194,86 @@ def _run(spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo, script: l
     with process:
         put("loads", "pass", f"loaded {process.policy_name} in {process.load_seconds:.2f} s in its own process")
         put("protocol", "pass", "has reset(info) and act(observations)")
-        pid = process.pid
         try:
-            process.reset(info)
+            return _play(process, spec, settings, info, script, put, results, record, trap)
+        finally:
+            if trap is not None and not trap.probed:
+                process.close()
+                results["isolation"] = _isolation(trap.verdict(None, spec.root), settings.sandbox, skip=True)
+
+
+def _play(process: PolicyProcess, spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo,
+          script: list[dict[str, dict]], put: Any, results: dict[str, CheckResult], record: bool,
+          trap: Trap | None) -> list[dict[str, int]] | None:
+    pid = process.pid
+    try:
+        process.reset(info)
+    except PolicyError as exc:
+        put("reset", "fail", exc.reason)
+        if exc.kind == "timeout":
+            put("time_limit", "fail", exc.reason)
+        return None
+    put("reset", "pass", f"reset({info.task}, {len(info.agent_ids)} agents, {info.track}) returned")
+    actions, seconds = [], []
+    drop_at = len(script) if settings.agents == 1 else settings.steps // 2
+    for t, observations in enumerate(script):
+        started = time.monotonic()
+        try:
+            actions.append(process.act(observations))
         except PolicyError as exc:
-            put("reset", "fail", exc.reason)
+            phase = "actions" if t < drop_at else "done_agents"
             if exc.kind == "timeout":
-                put("time_limit", "fail", exc.reason)
+                put("time_limit", "fail", f"step {t}: {exc.reason}")
+            else:
+                put(phase, "fail", f"step {t}: {exc.reason}")
+            if not record:
+                results["deterministic"] = CheckResult("deterministic", "fail", f"second run, step {t}: "
+                                                       f"{exc.reason}")
             return None
-        put("reset", "pass", f"reset({info.task}, {len(info.agent_ids)} agents, {info.track}) returned")
-        actions, seconds = [], []
-        drop_at = len(script) if settings.agents == 1 else settings.steps // 2
-        for t, observations in enumerate(script):
-            started = time.monotonic()
-            try:
-                actions.append(process.act(observations))
-            except PolicyError as exc:
-                phase = "actions" if t < drop_at else "done_agents"
-                if exc.kind == "timeout":
-                    put("time_limit", "fail", f"step {t}: {exc.reason}")
-                else:
-                    put(phase, "fail", f"step {t}: {exc.reason}")
-                if not record:
-                    results["deterministic"] = CheckResult("deterministic", "fail", f"second run, step {t}: "
-                                                           f"{exc.reason}")
-                return None
-            seconds.append(time.monotonic() - started)
-            if t + 1 == drop_at:
-                put("actions", "pass", f"{drop_at} steps with {settings.agents} agents: one int in 0..3 per agent"
-                    f" (seen {_histogram(actions)})")
-        if settings.agents == 1:
-            put("done_agents", "skip", "needs --agents 2 or more")
-        else:
-            put("done_agents", "pass", f"{len(script) - drop_at} steps after {info.agent_ids[-1]} was done: "
-                "answered only for the acting agents")
-        limit = settings.limits.step_seconds
-        put("time_limit", "pass", f"act median {1e3 * float(np.median(seconds)):.1f} ms, max "
-            f"{1e3 * max(seconds):.1f} ms (limit {limit:g} s per step)")
-        process.close()
-        if record:
-            gone = pid is not None and not _pid_alive(pid)
-            status: Status = "pass" if pid != os.getpid() and gone else "fail"
-            results["isolation"] = CheckResult("isolation", status, (
-                f"ran in process {pid} with a {settings.limits.memory_mb} MB memory limit; exited on close"
-                if status == "pass" else f"process {pid} still running after close"))
+        seconds.append(time.monotonic() - started)
+        if t + 1 == drop_at:
+            put("actions", "pass", f"{drop_at} steps with {settings.agents} agents: one int in 0..3 per agent"
+                f" (seen {_histogram(actions)})")
+    if settings.agents == 1:
+        put("done_agents", "skip", "needs --agents 2 or more")
+    else:
+        put("done_agents", "pass", f"{len(script) - drop_at} steps after {info.agent_ids[-1]} was done: "
+            "answered only for the acting agents")
+    limit = settings.limits.step_seconds
+    put("time_limit", "pass", f"act median {1e3 * float(np.median(seconds)):.1f} ms, max "
+        f"{1e3 * max(seconds):.1f} ms (limit {limit:g} s per step)")
+    reply = None
+    if trap is not None:
+        trap.probed = True
+        with contextlib.suppress(PolicyError):
+            reply = process.probe(trap.request(spec.root))
+    process.close()
+    if trap is not None:
+        gone = pid is not None and pid != os.getpid() and not _pid_alive(pid)
+        verdict = trap.verdict(reply, spec.root)
+        results["isolation"] = _isolation(verdict, settings.sandbox, "" if reply is not None else
+                                          "the escape probe did not answer",
+                                          "" if gone else f"process {pid} still running after close")
     return actions
+
+
+def _isolation(verdict: Any, sandbox: SandboxSettings, *problems: str, skip: bool = False) -> CheckResult:
+    """The isolation check's result from the trap's verdict and any other problem found; with `skip` (the
+    policy did not get as far as the probe) a skip unless it already went for the bait."""
+    failures = [p for p in problems if p]
+    if verdict.attempts:
+        shown = "; ".join(verdict.attempts[:3]) + ("; ..." if len(verdict.attempts) > 3 else "")
+        failures.append(f"the policy went for the bait data set/results its parent's command line names: {shown}")
+    if verdict.escapes:
+        where = "in the sandbox" if sandbox.enabled else "without a sandbox (--no-sandbox)"
+        failures.append(f"{where} the policy process {'; '.join(verdict.escapes)}")
+    if failures:
+        return CheckResult("isolation", "fail", "; ".join(failures))
+    if skip:
+        return CheckResult("isolation", "skip", "not run: the escape probe needs a policy that loads and plays")
+    note = f" ({verdict.note})" if verdict.note else ""
+    return CheckResult("isolation", "pass", "in the sandbox: no read of the data set, results or evaluator, no "
+                       "write outside its tmp, no network, no evaluator variables; left the bait alone" + note)
 
 
 def _compare(first: list[dict[str, int]], second: list[dict[str, int]] | None) -> CheckResult:

@@ -31,6 +31,7 @@ from typing import Any
 from ..errors import InputError, MainBenchError, SubmissionError
 from .ipc import encode_request, recv_reply, send_parts
 from .policy_child import EXIT_OUT_OF_MEMORY
+from .sandbox import SandboxSettings, launch, popen, signal_of_exit
 from .submission import PolicySpec, ProtocolError
 
 #: The kinds a `PolicyError.reason` starts with.
@@ -82,13 +83,17 @@ class PolicyProcess:
     """A team policy in its own process; use as a context manager.
 
     The constructor starts the process and waits (up to `limits.load_seconds`) until the submission is loaded;
-    a submission that fails to load raises `SubmissionError`. `reset` and `act` raise `PolicyError`.
+    a submission that fails to load raises `SubmissionError`. `reset` and `act` raise `PolicyError`. Every
+    process runs in the sandbox `sandbox` describes (`sandbox.py`; by default on, refused with `SandboxError`
+    where none can be made).
     """
 
-    def __init__(self, spec: PolicySpec, limits: Limits | None = None, seed: int = 0) -> None:
+    def __init__(self, spec: PolicySpec, limits: Limits | None = None, seed: int = 0,
+                 sandbox: SandboxSettings | None = None) -> None:
         self.spec = spec
         self.limits = limits or Limits()
         self.seed = int(seed)
+        self.sandbox = sandbox or SandboxSettings()
         self.policy_name = ""
         self.load_seconds = 0.0
         #: Seconds the last call spent inside the policy, as measured in its own process.
@@ -134,6 +139,13 @@ class PolicyProcess:
         reply = self._call("act", observations, budget, what)
         return validate_actions(reply, observations.keys())
 
+    def probe(self, request: dict[str, Any]) -> dict[str, Any]:
+        """Have the policy process try a cheater's reads, writes and connections (`escape_probe`); returns
+        what succeeded. Used by `check-agent`'s isolation check, never during evaluation."""
+        if not self.alive:
+            raise PolicyError("dead: the policy process was stopped after an earlier failure")
+        return self._call("probe", request, self.limits.load_seconds, "probe")
+
     def restart(self) -> None:
         """Kill the current process (if any) and start a fresh one with the same spec and seed."""
         self._kill()
@@ -165,14 +177,12 @@ class PolicyProcess:
             with contextlib.suppress(OSError):
                 end.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, _SOCKET_BUFFER)
                 end.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, _SOCKET_BUFFER)
-        env = dict(os.environ)
-        env.update({name: str(self.limits.threads) for name in _THREAD_VARS})
+        threads = {name: str(self.limits.threads) for name in _THREAD_VARS}
+        command = [sys.executable, "-m", "main_bench.evaluation.policy_child", str(child.fileno())]
+        module = self.spec.target if self.spec.kind == "module" else None
         try:
-            proc = subprocess.Popen(
-                [sys.executable, "-m", "main_bench.evaluation.policy_child", str(child.fileno())],
-                pass_fds=(child.fileno(),), stdin=subprocess.DEVNULL, stdout=_stdout_target(), env=env,
-                start_new_session=True, close_fds=True,
-            )
+            how = launch(command, self.spec.root, module, self.sandbox, self.limits.memory_mb, threads)
+            proc = popen(how, (child.fileno(),), _stdout_target())
         finally:
             child.close()
         self._proc, self._sock = proc, parent
@@ -256,7 +266,9 @@ class PolicyProcess:
             return "dead: the policy process closed its connection"
         if code == EXIT_OUT_OF_MEMORY:
             return f"memory: the policy process ran out of memory (limit {self.limits.memory_mb} MB)"
-        if code < 0:
+        signum = -code if code < 0 else signal_of_exit(code) if self.sandbox.enabled else None
+        if signum is not None:
+            code = -signum
             try:
                 name = signal.Signals(-code).name
             except ValueError:

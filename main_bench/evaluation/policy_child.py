@@ -1,7 +1,8 @@
 """The policy process: `python -m main_bench.evaluation.policy_child FD`, started by `PolicyProcess`.
 
 It limits its own address space and threads, loads the submission, then answers requests on the socket FD:
-`("reset", seq, EpisodeInfo)`, `("act", seq, observations)`, `("close", seq, None)`. Replies are JSON; actions
+`("reset", seq, EpisodeInfo)`, `("act", seq, observations)`, `("close", seq, None)`, and from `check-agent`
+only `("probe", seq, request)` (`escape_probe.try_escapes`). Replies are JSON; actions
 are described, not judged (the evaluator validates them): ints as ints, anything else by its type and repr.
 Its stdout goes to the evaluator's stderr so that a policy's prints never mix with machine-readable output.
 """
@@ -112,6 +113,10 @@ def _serve(sock: socket.socket, policy: Any) -> int:
                 seed_everything(payload.seed)
                 policy.reset(payload)
                 reply: dict[str, Any] = {"status": "ok"}
+            elif op == "probe":
+                from .escape_probe import try_escapes
+
+                reply = {"status": "ok", **try_escapes(payload)}
             else:
                 reply = {"status": "ok", **encode_actions(policy.act(payload))}
         except BaseException as exc:  # noqa: BLE001 - the policy's failure is the reply

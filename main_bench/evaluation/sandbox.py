@@ -1,0 +1,231 @@
+"""The sandbox of a policy process: bubblewrap (`bwrap`) around `python -m main_bench.evaluation.policy_child`.
+
+In: the command of the policy process, the submission's folder, the paths it must never see (data set, results,
+caches, scenes) and its memory limit. Out: the command line, environment and argument pipe that start it inside
+a sandbox with
+
+- a read-only view of the system libraries (`/usr`, `/lib*`, `/bin`, `/sbin`, `/etc`), the Python installation
+  (`sys.prefix`, `sys.base_prefix` and the exec prefixes), the toolkit's `main_bench` package and the
+  submission's own folder (module specs: the top-level package or module file they import from);
+- a private writable `/tmp` (a tmpfs of at most the policy's memory limit), the working directory `/tmp`, and
+  nothing else writable (the sandbox's root is read-only);
+- new user, pid, network, IPC, UTS and cgroup namespaces (`--unshare-all`): no network but a loopback that is
+  down, its own `/proc` in which the evaluator's processes do not exist, no capabilities, a new session (no
+  controlling terminal to inject keystrokes into), killed with its parent;
+- only the environment `SANDBOX_ENV` (no variable of the evaluator's), and bubblewrap's own options passed
+  through a pipe (`--args`), so neither the sandbox's pid 1 nor the policy sees a path of the evaluator.
+
+Inherited file descriptors (the IPC socket, stdout) pass through bubblewrap unchanged. A path to hide that lies
+inside a folder the sandbox shows (a data set inside the submission's folder, say) is covered by an empty
+read-only tmpfs (a folder) or by `/dev/null` (a file).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import importlib.machinery
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import InputError
+
+#: The whole environment of a sandboxed policy process (thread variables are added by `PolicyProcess`).
+SANDBOX_ENV: dict[str, str] = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp",
+                               "LANG": "C.UTF-8", "PYTHONDONTWRITEBYTECODE": "1", "PYTHONNOUSERSITE": "1"}
+SYSTEM_DIRS: tuple[str, ...] = ("/usr", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32", "/etc")
+#: Device nodes a GPU policy needs, shown when they exist.
+GPU_DEVICES: tuple[str, ...] = ("/dev/nvidiactl", "/dev/nvidia-uvm", "/dev/nvidia-uvm-tools", "/dev/nvidia0",
+                                "/dev/dri")
+NO_SANDBOX_HINT = ("install bubblewrap (Debian/Ubuntu: apt-get install bubblewrap) and allow user namespaces, or "
+                   "pass --no-sandbox to run the policy unsandboxed (recorded in the results)")
+PACKAGE_DIR = Path(__file__).resolve().parent.parent
+
+
+class SandboxError(InputError):
+    """No sandbox can be made on this machine (exit code 2): no bubblewrap, or it fails its probe."""
+
+
+@dataclass(frozen=True)
+class Bind:
+    """An extra folder shown in the sandbox at the same path: read-only unless `writable`."""
+
+    path: str
+    writable: bool = False
+
+
+@dataclass(frozen=True)
+class SandboxSettings:
+    """How policy processes are confined. `enabled` False runs them as plain child processes (`--no-sandbox`).
+
+    `hidden`: paths the policy must never see even where they lie inside a folder the sandbox shows.
+    `binds` and `wrapper` serve `check-agent`'s bait: extra folders, and a command run between the sandbox and
+    the policy process (the policy process's parent)."""
+
+    enabled: bool = True
+    hidden: tuple[str, ...] = ()
+    binds: tuple[Bind, ...] = ()
+    wrapper: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Launch:
+    """How to start a policy process: the command, its environment and working directory, and (sandboxed) the
+    bubblewrap options that `popen` writes into a pipe named by `--args` in place of `{args_fd}`."""
+
+    argv: tuple[str, ...]
+    env: dict[str, str]
+    cwd: str | None
+    args: bytes = b""
+
+
+def bwrap_path() -> str | None:
+    """The `bwrap` executable on PATH, or None."""
+    return shutil.which("bwrap")
+
+
+@functools.cache
+def sandbox_problem() -> str | None:
+    """None when a sandbox can be made here, else why not (one line). Probed once per process by running
+    `python -c pass` in a sandbox exactly as policies get it."""
+    exe = bwrap_path()
+    if exe is None:
+        return "bubblewrap (bwrap) is not installed"
+    options = sandbox_options(None, SandboxSettings(), memory_mb=64)
+    probe = Launch((exe, "--args", "{args_fd}", sys.executable, "-c", "pass"), dict(SANDBOX_ENV), "/",
+                   _encode(options))
+    try:
+        proc = popen(probe, (), subprocess.PIPE, stderr=subprocess.PIPE)
+        _, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+        return f"bubblewrap ({exe}) did not start a sandbox within 30 s"
+    except OSError as exc:
+        return f"bubblewrap ({exe}) could not run: {exc}"
+    if proc.returncode != 0:
+        detail = " ".join(err.decode(errors="replace").split())[:200] or f"exit code {proc.returncode}"
+        return f"bubblewrap ({exe}) fails to make a sandbox: {detail}"
+    return None
+
+
+def require_sandbox() -> None:
+    """Raise `SandboxError` (one line naming the problem and `--no-sandbox`) when no sandbox can be made."""
+    problem = sandbox_problem()
+    if problem is not None:
+        raise SandboxError(f"no sandbox for the policy process: {problem}; {NO_SANDBOX_HINT}")
+
+
+def launch(command: list[str], root: Path | None, module: str | None, settings: SandboxSettings,
+           memory_mb: int, extra_env: dict[str, str]) -> Launch:
+    """How to start `command` (the policy process) under `settings`; `root` is the submission's folder,
+    `module` the top-level module of a module spec. Without a sandbox: as today, with the wrapper in front."""
+    argv = [*settings.wrapper, *command]
+    if not settings.enabled:
+        return Launch(tuple(argv), {**os.environ, **extra_env}, None)
+    require_sandbox()
+    exe = bwrap_path()
+    assert exe is not None
+    shown = [p for p in (root, module_location(module)) if p is not None]
+    options = sandbox_options(shown, settings, memory_mb)
+    for name, value in {**SANDBOX_ENV, **extra_env}.items():
+        options += ["--setenv", name, value]
+    return Launch((exe, "--args", "{args_fd}", *argv), dict(SANDBOX_ENV), "/", _encode(options))
+
+
+def popen(how: Launch, pass_fds: tuple[int, ...], stdout: int | None, stderr: int | None = None
+          ) -> subprocess.Popen:
+    """Start `how` in its own session with only `pass_fds` (and the `--args` pipe) inherited."""
+    read = write = -1
+    argv = list(how.argv)
+    fds = tuple(pass_fds)
+    try:
+        if how.args:
+            read, write = os.pipe()
+            os.write(write, how.args)  # a few kB: fits the pipe's buffer, so this never blocks
+            os.close(write)
+            write = -1
+            argv = [a.replace("{args_fd}", str(read)) if a == "{args_fd}" else a for a in argv]
+            fds = (*fds, read)
+        return subprocess.Popen(argv, pass_fds=fds, stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr,
+                                env=how.env, cwd=how.cwd, start_new_session=True, close_fds=True)
+    finally:
+        for fd in (read, write):
+            if fd >= 0:
+                os.close(fd)
+
+
+def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_mb: int) -> list[str]:
+    """bubblewrap's options (see the module docstring); `shown`: the submission's folder or module file."""
+    opts = ["--unshare-all", "--die-with-parent", "--new-session", "--cap-drop", "ALL", "--clearenv"]
+    bound: list[Path] = []
+
+    def show(path: Path, writable: bool = False) -> None:
+        if not path.exists() or any(_inside(path, b) for b in bound):
+            return
+        bound.append(path)
+        opts.extend(["--bind" if writable else "--ro-bind", str(path), str(path)])
+
+    for name in SYSTEM_DIRS:
+        path = Path(name)
+        if path.is_symlink():
+            opts.extend(["--symlink", os.readlink(path), name])
+        elif path.is_dir():
+            show(path)
+    for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}):
+        show(Path(prefix).resolve())
+        if Path(prefix) != Path(prefix).resolve():
+            show(Path(prefix))
+    show(PACKAGE_DIR)
+    for path in shown or ():
+        show(path.resolve())
+    opts += ["--proc", "/proc", "--dev", "/dev"]
+    for dev in GPU_DEVICES:
+        opts += ["--dev-bind-try", dev, dev]
+    opts += ["--size", str(int(memory_mb) * 1024 * 1024), "--tmpfs", "/tmp"]
+    for bind in settings.binds:
+        opts.extend(["--bind" if bind.writable else "--ro-bind", bind.path, bind.path])
+    for hidden in settings.hidden:
+        path = Path(hidden).resolve()
+        if any(_inside(path, b) for b in bound):
+            if path.is_dir():
+                opts += ["--tmpfs", str(path), "--remount-ro", str(path)]
+            elif path.exists():
+                opts += ["--ro-bind", "/dev/null", str(path)]
+    opts += ["--remount-ro", "/", "--chdir", "/tmp"]
+    return opts
+
+
+def module_location(module: str | None) -> Path | None:
+    """Where a module spec's top-level module lives (its package folder or its file), found without importing
+    it; None when it is not found or lies in the Python installation already shown."""
+    if not module:
+        return None
+    top = module.split(".", 1)[0]
+    with contextlib.suppress(ImportError, ValueError):
+        found = importlib.machinery.PathFinder.find_spec(top)
+        if found is not None:
+            if found.submodule_search_locations:
+                return Path(next(iter(found.submodule_search_locations)))
+            if found.origin and found.origin not in ("built-in", "frozen"):
+                return Path(found.origin)
+    return None
+
+
+def signal_of_exit(code: int | None) -> int | None:
+    """bubblewrap exits with 128 + N when the sandboxed process was killed by signal N: that N, else None."""
+    if code is not None and 128 < code < 128 + 65:
+        return code - 128
+    return None
+
+
+def _encode(options: list[str]) -> bytes:
+    return b"".join(o.encode() + b"\0" for o in options)
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    return path == folder or folder in path.parents
