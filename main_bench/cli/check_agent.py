@@ -29,18 +29,23 @@ def check_agent(
     seed: int = typer.Option(0, "--seed", help="Seed given to the policy and to the synthetic observations."),
     step_seconds: float = typer.Option(10.0, "--step-seconds", help="Time limit per act call."),
     memory_mb: int = typer.Option(4096, "--memory-mb", help="Address-space limit of the policy process (MB)."),
+    no_sandbox: bool = typer.Option(False, "--no-sandbox", help="Run the policy without the bubblewrap sandbox "
+                                    "(the isolation check then fails)."),
     as_json: bool = JsonOption,
 ) -> None:
     """Check that a submission loads, follows the team policy protocol, answers with valid actions for exactly
     the acting agents, is deterministic for a seed and stays within the time limit, in its own process."""
     from ..evaluation.check import CheckSettings, check_policy
     from ..evaluation.isolation import Limits
+    from ..evaluation.sandbox import SandboxSettings, require_sandbox
     from ..evaluation.submission import parse_spec
 
     policy_spec = parse_spec(spec)
+    if not no_sandbox:
+        require_sandbox()
     limits = Limits(step_seconds=step_seconds, memory_mb=memory_mb)
     settings = CheckSettings(agents=agents, task=task, track=track, goal=goal, steps=steps, seed=seed,  # type: ignore[arg-type]
-                             limits=limits)
+                             limits=limits, sandbox=SandboxSettings(enabled=not no_sandbox))
     report = check_policy(policy_spec, settings)
     payload = report.to_dict()
     payload["spec"] = spec

@@ -97,6 +97,8 @@ def evaluate(
     chunk_size: int = typer.Option(8, "--chunk-size", help="Episodes per part file (the unit of resumption)."),
     cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache of built-in houses and navmeshes."),
     no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
+    no_sandbox: bool = typer.Option(False, "--no-sandbox", help="Run the policy without the bubblewrap sandbox "
+                                    "(recorded in the results and marked on the leaderboard)."),
     as_json: bool = JsonOption,
 ) -> None:
     """Evaluate a team policy: per-episode records, trajectories and summary.json with 95% CIs."""
@@ -119,6 +121,7 @@ def evaluate(
         limits=PolicyLimits(step_seconds=step_seconds, episode_seconds=episode_seconds, memory_mb=memory_mb),
         submission=SubmissionMeta(name=name, description=description, links=tuple(link), date=date,
                                   baseline=baseline),
+        sandbox=not no_sandbox,
     )
     bar = _Progress(enabled=not no_progress and not as_json)
     try:

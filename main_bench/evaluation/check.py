@@ -19,8 +19,8 @@ from ..errors import InputError, SubmissionError
 from ..scenes.objects import KNOWN_CATEGORIES
 from .isolation import Limits, PolicyError, PolicyProcess
 from .isolation_check import Trap
-from .sandbox import SandboxSettings
 from .protocol import TRACKS, EpisodeInfo, TargetInfo, agent_ids, observation_space
+from .sandbox import SandboxSettings
 from .submission import PolicySpec, ProtocolError, parse_spec
 
 CHECK_NAMES: tuple[str, ...] = (

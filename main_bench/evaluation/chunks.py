@@ -2,8 +2,9 @@
 
 Episodes of each track (`split/task/agents`) are sorted by id, cut to `--limit`, and split into chunks of
 `chunk_size`; chunk k of a track writes `part-k` of its records and trajectories. The chunks do not depend on
-`--workers` or the executor, so neither do the files. A chunk is finished when its records part exists (written
-atomically after its trajectories part); a restarted run skips finished chunks, so rows are never duplicated.
+`--workers` or the executor, so neither do the files. A chunk is finished when its ledger entry exists (written
+atomically after its trajectories and records parts, with their hashes: `ledger.py`); a restarted run skips
+finished chunks, so rows are never duplicated.
 """
 
 from __future__ import annotations
@@ -33,9 +34,13 @@ class Chunk:
         """Where this chunk's records part lives."""
         return partition_dir(out, "records", self.split, self.task, self.agents) / f"part-{self.part:05d}.parquet"
 
+    def ledger_path(self, out: Path) -> Path:
+        """Where this chunk's ledger entry (the hashes of its part files) lives."""
+        return partition_dir(out, "ledger", self.split, self.task, self.agents) / f"part-{self.part:05d}.json"
+
     def finished(self, out: Path) -> bool:
-        """Whether the chunk's records part has been written."""
-        return self.records_path(out).is_file()
+        """Whether the chunk's parts and their ledger entry have been written."""
+        return self.ledger_path(out).is_file()
 
 
 def make_chunks(split: str, task: str, agents: int, episode_ids: list[str], chunk_size: int,

@@ -26,10 +26,9 @@ def try_escapes(request: dict[str, Any]) -> dict[str, Any]:
             done.append(f"read {path}")
     pid = request.get("evaluator_pid")
     for what, digest in (request.get("evaluator_proc") or {}).items():
-        with contextlib.suppress(OSError):
-            with open(f"/proc/{pid}/{what}", "rb") as fh:
-                if hashlib.sha256(fh.read()).hexdigest() == digest:
-                    done.append(f"read the evaluator's /proc/{pid}/{what}")
+        with contextlib.suppress(OSError), open(f"/proc/{pid}/{what}", "rb") as fh:
+            if hashlib.sha256(fh.read()).hexdigest() == digest:
+                done.append(f"read the evaluator's /proc/{pid}/{what}")
     for folder in request.get("write", ()):  # the evaluator looks for the file on its side and removes it
         with contextlib.suppress(OSError):
             fd = os.open(os.path.join(folder, request["write_name"]), os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)

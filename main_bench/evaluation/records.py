@@ -11,7 +11,7 @@ from __future__ import annotations
 import pyarrow as pa
 
 #: Version of the records, trajectories and summary.json; readers refuse a newer one.
-RESULTS_SCHEMA_VERSION = 1
+RESULTS_SCHEMA_VERSION = 2  # 2: summary.json carries `files` (SHA-256 of every part) and settings.sandbox
 TEAM = -1
 
 RECORD_SCHEMA = pa.schema(

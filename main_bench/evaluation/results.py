@@ -1,8 +1,9 @@
 """Reading and writing a results directory (layout in `records.py`).
 
 `summary.json` holds: `schema_version`, `toolkit_version`, `submission` (name, description, links, date,
-baseline, spec), `dataset` (path, manifest_hash), `settings`, `counts`, and `tracks`: for each
-`<split>/<task>/<agents>` key, each team metric's `{mean, ci_low, ci_high}` and the episode count.
+baseline, spec), `dataset` (path, manifest_hash), `settings` (with `sandbox`: false for `--no-sandbox`),
+`counts`, `tracks`: for each `<split>/<task>/<agents>` key, each team metric's `{mean, ci_low, ci_high}` and
+the episode count, and `files`: the SHA-256 of every part file, checked by `load_results` (`ledger.py`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import pyarrow.parquet as pq
 
 from ..errors import ResultsError
 from ..io import atomic_path, check_schema_version, read_json
+from .ledger import verify_results
 from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
 
 PARTITION_SCHEMA = pa.schema([pa.field("split", pa.string()), pa.field("task", pa.string()),
@@ -39,13 +41,18 @@ def write_part(root: Path, kind: str, split: str, task: str, agents: int, part: 
     return path
 
 
-def _read(root: Path, kind: str, filter_expr=None) -> pd.DataFrame:
+def _read(root: Path, kind: str, filter_expr=None, files: list[Path] | None = None) -> pd.DataFrame:
+    """The rows of `kind` under `root`: of the part files `files` only (those of that kind), else of all."""
     schema = RECORD_SCHEMA if kind == "records" else TRAJECTORY_SCHEMA
     base = root / kind
-    if not base.is_dir():
+    if files is not None:
+        files = [p for p in files if Path(base) in Path(p).parents]
+    if not base.is_dir() or files == []:
         return pd.DataFrame({f.name: pd.Series(dtype=object) for f in list(schema) + list(PARTITION_SCHEMA)})
-    ds = pads.dataset(base, format="parquet", partitioning=pads.partitioning(PARTITION_SCHEMA, flavor="hive"),
-                      schema=pa.unify_schemas([schema, PARTITION_SCHEMA]), exclude_invalid_files=False)
+    source: Any = base if files is None else [str(p) for p in files]
+    ds = pads.dataset(source, format="parquet", partitioning=pads.partitioning(PARTITION_SCHEMA, flavor="hive"),
+                      schema=pa.unify_schemas([schema, PARTITION_SCHEMA]), exclude_invalid_files=False,
+                      partition_base_dir=None if files is None else str(base))
     return ds.to_table(filter=filter_expr).to_pandas()
 
 
@@ -56,6 +63,7 @@ class Results:
     path: Path
     summary: dict[str, Any]
     records: pd.DataFrame
+    files: tuple[Path, ...] = ()
 
     @property
     def teams(self) -> pd.DataFrame:
@@ -69,14 +77,15 @@ class Results:
 
     def trajectory(self, episode_id: str) -> pd.DataFrame:
         """The per-step rows of one episode, sorted by step and agent."""
-        df = _read(self.path, "trajectories", pads.field("episode_id") == episode_id)
+        df = _read(self.path, "trajectories", pads.field("episode_id") == episode_id, list(self.files))
         if df.empty:
             raise ResultsError(f"no trajectory for episode {episode_id!r}", path=self.path)
         return df.sort_values(["step", "agent_index"]).reset_index(drop=True)
 
 
 def load_results(path: str | Path) -> Results:
-    """Load a results directory written by `main-bench evaluate`; a bad directory raises `ResultsError`."""
+    """Load a results directory written by `main-bench evaluate`, its part files checked against the hashes in
+    `summary.json` (`ledger.verify_results`); a bad or edited directory raises `ResultsError`."""
     path = Path(path)
     if not path.is_dir():
         raise ResultsError("results directory not found", path=path)
@@ -86,8 +95,9 @@ def load_results(path: str | Path) -> Results:
                            path=path)
     summary = read_json(summary_path, what="results summary")
     check_schema_version(summary, RESULTS_SCHEMA_VERSION, summary_path, "results summary")
+    files = verify_results(path, summary, summary_path)
     try:
-        records = _read(path, "records")
+        records = _read(path, "records", files=files)
     except (pa.ArrowInvalid, OSError) as exc:
         raise ResultsError(f"unreadable records: {exc}", path=path) from None
-    return Results(path=path, summary=summary, records=records)
+    return Results(path=path, summary=summary, records=records, files=tuple(files))

@@ -19,6 +19,7 @@ from ..errors import DatasetError, ResultsError, SubmissionError
 from ..io import atomic_write_json, read_json
 from .baselines import privileged_baseline
 from .chunks import Chunk, make_chunks
+from .ledger import verified_files
 from .results import _read
 from .settings import EvalSettings, SubmissionMeta
 from .summary import build_summary
@@ -139,9 +140,12 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
     """
     t0 = time.perf_counter()
     if privileged_baseline(settings.agent) is None:
+        from .sandbox import require_sandbox
         from .submission import parse_spec
 
         parse_spec(settings.agent)  # a malformed spec fails now, before any file is written
+        if settings.sandbox:
+            require_sandbox()
     manifest, chunks = plan(settings)
     meta = submission_meta(settings)
     settings = replace(settings, submission=meta)
@@ -182,7 +186,8 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
 def write_summary(settings: EvalSettings, manifest: Any, chunks: list[Chunk]) -> dict[str, Any]:
     """Compute `summary.json` from the records of `chunks` and write it atomically; returns it."""
     out = Path(settings.out)
-    records = _read(out, "records")
+    files = verified_files(out, chunks)
+    records = _read(out, "records", files=[out / rel for rel in files])
     keys = {(c.split, c.task, c.agents) for c in chunks}
     if not records.empty:
         mask = [(s, t, int(a)) in keys for s, t, a in zip(records["split"], records["task"], records["agents"],
@@ -195,6 +200,6 @@ def write_summary(settings: EvalSettings, manifest: Any, chunks: list[Chunk]) ->
         "settings": settings.to_json(),
         "task_rules": rules_json(manifest),
     }
-    summary = build_summary(records, settings.seed, meta)
+    summary = {**build_summary(records, settings.seed, meta), "files": files}
     atomic_write_json(out / "summary.json", summary)
     return summary

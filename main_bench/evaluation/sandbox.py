@@ -31,6 +31,7 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from ..errors import InputError
 
@@ -198,6 +199,16 @@ def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_
                 opts += ["--ro-bind", "/dev/null", str(path)]
     opts += ["--remount-ro", "/", "--chdir", "/tmp"]
     return opts
+
+
+def evaluation_sandbox(settings: Any, manifest: Any) -> SandboxSettings:
+    """The sandbox of an evaluation (`EvalSettings`): on unless `--no-sandbox`, hiding the data set, the
+    results folder, the cache of built-in houses and navmeshes, and the folders of the data set's scene files."""
+    from ..scenes.builtin import default_cache_dir
+
+    hidden = [settings.episodes, settings.out, settings.cache_dir or default_cache_dir()]
+    hidden += [Path(e.path).parent for e in manifest.scenes.values() if getattr(e, "path", None)]
+    return SandboxSettings(enabled=settings.sandbox, hidden=tuple(str(Path(p).resolve()) for p in hidden))
 
 
 def module_location(module: str | None) -> Path | None:

@@ -57,6 +57,7 @@ class EvalSettings:
     `limit`: at most this many episodes per (task, agents) track, the first by episode id. `chunk_size`:
     episodes per part file; fixed chunks make a run resumable and its files independent of `workers`.
     `max_consecutive_failures`: policy failures in a row after which evaluation stops (PolicyFailure).
+    `sandbox`: run submitted policies in the bubblewrap sandbox (`sandbox.py`); False is `--no-sandbox`.
     """
 
     episodes: Path
@@ -76,6 +77,7 @@ class EvalSettings:
     cache_dir: Path | None = None
     limits: PolicyLimits = field(default_factory=PolicyLimits)
     submission: SubmissionMeta = field(default_factory=SubmissionMeta)
+    sandbox: bool = True
 
     def __post_init__(self) -> None:
         if self.workers < 1:
@@ -113,6 +115,7 @@ class EvalSettings:
             "track": self.track,
             "chunk_size": self.chunk_size,
             "renderer": self.renderer,
+            "sandbox": self.sandbox,
         }
 
     def to_json(self) -> dict[str, Any]:

@@ -19,6 +19,7 @@ import pyarrow as pa
 
 from ..episodes.schema import Episode
 from ..errors import DatasetError, PolicyFailure
+from . import ledger
 from .baselines import privileged_baseline
 from .chunks import Chunk
 from .episode_loop import EpisodeFailure, LoopSettings, run_episode
@@ -47,13 +48,15 @@ class _IsolatedPolicy:
     privileged = False
     uses_pixels = True
 
-    def __init__(self, settings: EvalSettings) -> None:
+    def __init__(self, settings: EvalSettings, manifest: Any) -> None:
         from .isolation import Limits, PolicyProcess
+        from .sandbox import evaluation_sandbox
         from .submission import parse_spec
 
         limits = Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
                         memory_mb=settings.limits.memory_mb)
-        self._proc = PolicyProcess(parse_spec(settings.agent), limits, settings.seed)
+        sandbox = evaluation_sandbox(settings, manifest)
+        self._proc = PolicyProcess(parse_spec(settings.agent), limits, settings.seed, sandbox)
 
     def reset(self, info: Any) -> None:
         from .isolation import PolicyError
@@ -98,7 +101,7 @@ class WorkerContext:
             if factory is not None:
                 self._policy, self._privileged = factory(self.settings.seed), True
             else:
-                self._policy, self._privileged = _IsolatedPolicy(self.settings), False
+                self._policy, self._privileged = _IsolatedPolicy(self.settings, self.manifest), False
         return self._policy
 
     def _episode(self, chunk: Chunk, episode_id: str) -> Episode:
@@ -156,9 +159,11 @@ class WorkerContext:
             if on_episode is not None:
                 on_episode(steps)
         traj = pa.concat_tables(trajectories) if trajectories else TRAJECTORY_SCHEMA.empty_table()
-        write_part(self.settings.out, "trajectories", chunk.split, chunk.task, chunk.agents, chunk.part, traj)
+        out = self.settings.out
+        written = [write_part(out, "trajectories", chunk.split, chunk.task, chunk.agents, chunk.part, traj)]
         table = pa.Table.from_pylist(records, schema=RECORD_SCHEMA)
-        write_part(self.settings.out, "records", chunk.split, chunk.task, chunk.agents, chunk.part, table)
+        written.append(write_part(out, "records", chunk.split, chunk.task, chunk.agents, chunk.part, table))
+        ledger.write_entry(out, chunk, written)
         return ChunkReport(chunk.key, len(chunk.episode_ids), steps_total, tuple(failures),
                            time.perf_counter() - t0)
 

@@ -10,7 +10,7 @@ Shape (schema_version 1)::
                     "ranking": [{"rank": 1, "method_name": "..."}, ...]}],
         "submissions": [{
             "submission_metadata": {"method_name", "method_description", "project_url", "publication_url",
-                                    "links", "date", "baseline", "results_dir"},
+                                    "links", "date", "baseline", "sandboxed", "results_dir"},
             "result": [{"<split>/<task>/<agents>": {"success": m, "success_ci_low": lo,
                         "success_ci_high": hi, ... (spl, soft_spl, distance_to_goal, steps, collisions),
                         "episodes": n, "rank": r}}, ...]}]}]}
@@ -42,6 +42,7 @@ def _metadata(sub: Submission) -> dict[str, Any]:
         "links": list(sub.links),
         "date": sub.date,
         "baseline": sub.baseline,
+        "sandboxed": sub.sandboxed,
         "results_dir": str(sub.results_dir),
     }
 

@@ -26,16 +26,24 @@ th{background:#f6f8fa}td.name,th.name{text-align:left}tbody tr:nth-child(even){b
 tr.baseline td{color:#57606a;font-style:italic}
 .ci{display:block;color:#6e7781;font-size:.75rem;white-space:nowrap}
 .badge{display:inline-block;font-size:.7rem;font-style:normal;background:#ddf4ff;color:#0969da;border-radius:.6rem;
-padding:0 .45rem;margin-left:.35rem}
+padding:0 .45rem;margin-left:.35rem}.badge.unsandboxed{background:#ffebe9;color:#cf222e}
 figure{margin:1rem 0 2rem}figure img{max-width:100%;border:1px solid #d0d7de}
 figcaption{color:#57606a;font-size:.85rem}code{background:#f6f8fa;padding:0 .25rem}
 ul.subs li{margin-bottom:.4rem}
 """
 
 
+def _badges(sub: Submission) -> str:
+    return "".join(_BADGES[m] for m in sub.marks)
+
+
+_BADGES = {"baseline": '<span class="badge">baseline</span>',
+           "unsandboxed": '<span class="badge unsandboxed" title="evaluated with --no-sandbox: the policy could '
+                          'read the data set and edit its results">unsandboxed</span>'}
+
+
 def _name_cell(sub: Submission) -> str:
-    badge = '<span class="badge">baseline</span>' if sub.baseline else ""
-    return f'<td class="name">{escape(sub.name)}{badge}</td>'
+    return f'<td class="name">{escape(sub.name)}{_badges(sub)}</td>'
 
 
 def _est_cell(metric: str, est) -> str:
@@ -87,8 +95,7 @@ def _links(sub: Submission) -> str:
 def _submissions_html(section: Section) -> str:
     items = []
     for s in section.submissions:
-        badge = '<span class="badge">baseline</span>' if s.baseline else ""
-        parts = [f"<strong>{escape(s.name)}</strong>{badge}"]
+        parts = [f"<strong>{escape(s.name)}</strong>{_badges(s)}"]
         if s.date:
             parts.append(f" ({escape(s.date)})")
         if s.description:

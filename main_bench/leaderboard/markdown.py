@@ -15,7 +15,7 @@ def md_escape(text: str) -> str:
 
 
 def _name(sub) -> str:
-    return md_escape(sub.name) + (" *(baseline)*" if sub.baseline else "")
+    return md_escape(sub.name) + "".join(f" *({m})*" for m in sub.marks)
 
 
 def track_markdown(table: TrackTable) -> str:
@@ -55,7 +55,7 @@ def table2_markdown(t2: Table2) -> str:
 def _submissions_markdown(section) -> str:
     lines = []
     for s in section.submissions:
-        text = f"- **{md_escape(s.name)}**" + (" *(baseline)*" if s.baseline else "")
+        text = f"- **{md_escape(s.name)}**" + "".join(f" *({m})*" for m in s.marks)
         if s.date:
             text += f" ({md_escape(s.date)})"
         if s.description:

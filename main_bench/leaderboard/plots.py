@@ -32,7 +32,7 @@ def _plain(text: str) -> str:
 
 
 def _label(sub) -> str:
-    return _plain(sub.name) + (" (baseline)" if sub.baseline else "")
+    return _plain(sub.name) + "".join(f" ({m})" for m in sub.marks)
 
 
 def method_bars(tracks: list[TrackTable], names: list[str]) -> Figure:

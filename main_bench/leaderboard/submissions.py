@@ -29,6 +29,13 @@ class Submission:
     manifest_hash: str
     dataset_path: str
     sensor_track: str
+    #: False when the policy ran without the sandbox (`evaluate --no-sandbox`): marked on every row.
+    sandboxed: bool = True
+
+    @property
+    def marks(self) -> tuple[str, ...]:
+        """The labels shown after the name: `baseline`, `unsandboxed`."""
+        return tuple(m for m, on in (("baseline", self.baseline), ("unsandboxed", not self.sandboxed)) if on)
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,6 +83,7 @@ def submission_from_results(results: Results) -> Submission:
         manifest_hash=manifest_hash,
         dataset_path=_text(dataset.get("path")),
         sensor_track=sensor_track,
+        sandboxed=not (isinstance(settings, dict) and settings.get("sandbox") is False),
     )
 
 

@@ -17,7 +17,8 @@ import pytest
 from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
-from main_bench.evaluation.records import RECORD_SCHEMA, TEAM, TRAJECTORY_SCHEMA
+from main_bench.evaluation.ledger import file_hashes
+from main_bench.evaluation.records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
 from main_bench.evaluation.results import write_part
 from main_bench.io import atomic_write_json, sha256_file
 from main_bench.navmesh import NavMeshSettings
@@ -127,11 +128,14 @@ def make_results(root: Path, dataset: Path, name: str, skill: float, *, baseline
                 traj_part.setdefault(key, []).append(dict(
                     episode_id=ep["episode_id"], step=t, agent_index=i, action=-1 if t == 0 else 1,
                     x=p[0], y=p[1], z=p[2], yaw=0.0, collided=False, distance_to_goal=0.0))
+    written = []
     for (split, task, n), rows in by_part.items():
-        write_part(root, "records", split, task, n, 0, pa.Table.from_pylist(rows, schema=RECORD_SCHEMA))
-        write_part(root, "trajectories", split, task, n, 0,
-                   pa.Table.from_pylist(traj_part[(split, task, n)], schema=TRAJECTORY_SCHEMA))
-    summary = {"schema_version": 1, "toolkit_version": "fixture",
+        written.append(write_part(root, "records", split, task, n, 0,
+                                  pa.Table.from_pylist(rows, schema=RECORD_SCHEMA)))
+        written.append(write_part(root, "trajectories", split, task, n, 0,
+                                  pa.Table.from_pylist(traj_part[(split, task, n)], schema=TRAJECTORY_SCHEMA)))
+    summary = {"schema_version": RESULTS_SCHEMA_VERSION, "toolkit_version": "fixture",
+               "files": file_hashes(root, written),
                "submission": {"name": name, "description": description, "links": list(links),
                               "date": "2026-11-01", "baseline": baseline},
                "dataset": {"path": str(dataset), "manifest_hash": manifest_hash},

@@ -16,6 +16,7 @@ from lb_fixtures import make_results
 from PIL import Image
 
 from main_bench.errors import ResultsError
+from main_bench.io import sha256_file
 from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
 from main_bench.leaderboard.plots import DISTANCE_EDGES
 
@@ -214,6 +215,13 @@ def test_same_names_are_told_apart_or_refused(tmp_path, episodes_dir):
 def test_records_that_appear_twice_are_refused(tmp_path, episodes_dir):
     r = make_results(tmp_path / "dup", episodes_dir, "dup", 0.5)
     part = sorted((r / "records").rglob("*.parquet"))[0]
-    shutil.copy(part, part.with_name("copied-" + part.name))
+    copy = part.with_name("copied-" + part.name)
+    shutil.copy(part, copy)
+    with pytest.raises(ResultsError, match="not among the files summary.json lists") as info:
+        build_leaderboard([r], tmp_path / "lb", FAST)
+    assert str(copy) in str(info.value)
+    summary = json.loads((r / "summary.json").read_text())  # a merged folder whose summary lists both copies
+    summary["files"][copy.relative_to(r).as_posix()] = sha256_file(copy)
+    (r / "summary.json").write_text(json.dumps(summary))
     with pytest.raises(ResultsError, match="appear twice"):
         build_leaderboard([r], tmp_path / "lb", FAST)
