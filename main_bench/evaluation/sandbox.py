@@ -177,6 +177,10 @@ def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_
             opts.extend(["--symlink", os.readlink(path), name])
         elif path.is_dir():
             show(path)
+    opts += ["--proc", "/proc", "--dev", "/dev"]
+    for dev in GPU_DEVICES:
+        opts += ["--dev-bind-try", dev, dev]
+    opts += ["--size", str(int(memory_mb) * 1024 * 1024), "--tmpfs", "/tmp"]  # before what may lie under /tmp
     for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}):
         show(Path(prefix).resolve())
         if Path(prefix) != Path(prefix).resolve():
@@ -184,10 +188,6 @@ def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_
     show(PACKAGE_DIR)
     for path in shown or ():
         show(path.resolve())
-    opts += ["--proc", "/proc", "--dev", "/dev"]
-    for dev in GPU_DEVICES:
-        opts += ["--dev-bind-try", dev, dev]
-    opts += ["--size", str(int(memory_mb) * 1024 * 1024), "--tmpfs", "/tmp"]
     for bind in settings.binds:
         opts.extend(["--bind" if bind.writable else "--ro-bind", bind.path, bind.path])
     for hidden in settings.hidden:

@@ -61,3 +61,10 @@ class Policy:
     def act(self, observations: dict) -> dict[str, int]:
         self.step += 1
         return {agent: 0 if self.step >= 2 else 1 for agent in observations}
+
+
+class HonestTwin(Policy):
+    """The forge's moves without the forging: what its results must be when the forging fails."""
+
+    def reset(self, info) -> None:
+        self.step = 0
