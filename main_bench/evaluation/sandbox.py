@@ -7,7 +7,8 @@ a sandbox with
 - a read-only view of the system libraries (`/usr`, `/lib*`, `/bin`, `/sbin`, `/etc`), the Python installation
   (`sys.prefix`, `sys.base_prefix` and the exec prefixes), the toolkit's `main_bench` package and the
   submission's own folder (module specs: the top-level package or module file they import from);
-- a private writable `/tmp` (a tmpfs of at most the policy's memory limit), the working directory `/tmp`, and
+- a private writable `/tmp` (a tmpfs of at most the policy's memory limit with bubblewrap 0.8 or later), the
+  working directory `/tmp`, and
   nothing else writable (the sandbox's root is read-only);
 - new user, pid, network, IPC, UTS and cgroup namespaces (`--unshare-all`): no network but a loopback that is
   down, its own `/proc` in which the evaluator's processes do not exist, no capabilities, a new session (no
@@ -45,6 +46,8 @@ GPU_DEVICES: tuple[str, ...] = ("/dev/nvidiactl", "/dev/nvidia-uvm", "/dev/nvidi
 NO_SANDBOX_HINT = ("install bubblewrap (Debian/Ubuntu: apt-get install bubblewrap) and allow user namespaces, or "
                    "pass --no-sandbox to run the policy unsandboxed (recorded in the results)")
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
+#: bubblewrap version that limits a tmpfs's size (`--size`); older ones get an unlimited /tmp.
+SIZE_OPTION_SINCE = (0, 8, 0)
 
 
 class SandboxError(InputError):
@@ -87,6 +90,21 @@ class Launch:
 def bwrap_path() -> str | None:
     """The `bwrap` executable on PATH, or None."""
     return shutil.which("bwrap")
+
+
+@functools.cache
+def bwrap_version() -> tuple[int, ...]:
+    """bubblewrap's version as numbers, e.g. (0, 8, 0); () when unknown."""
+    exe = bwrap_path()
+    if exe is None:
+        return ()
+    try:
+        text = subprocess.run([exe, "--version"], capture_output=True, text=True, timeout=10, check=False).stdout
+    except (OSError, subprocess.TimeoutExpired):
+        return ()
+    words = text.split()
+    parts = words[-1].split(".") if words else []
+    return tuple(int(p) for p in parts if p.isdigit())
 
 
 @functools.cache
@@ -180,7 +198,9 @@ def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_
     opts += ["--proc", "/proc", "--dev", "/dev"]
     for dev in GPU_DEVICES:
         opts += ["--dev-bind-try", dev, dev]
-    opts += ["--size", str(int(memory_mb) * 1024 * 1024), "--tmpfs", "/tmp"]  # before what may lie under /tmp
+    if bwrap_version() >= SIZE_OPTION_SINCE:
+        opts += ["--size", str(int(memory_mb) * 1024 * 1024)]
+    opts += ["--tmpfs", "/tmp"]  # before what may lie under /tmp
     for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}):
         show(Path(prefix).resolve())
         if Path(prefix) != Path(prefix).resolve():
