@@ -196,3 +196,18 @@ def test_no_bubblewrap_refuses_in_one_line_unless_no_sandbox(tiny_dataset, tmp_p
     assert board.returncode == 0, board.stderr
     assert "*(unsandboxed)*" in (tmp_path / "lb" / "README.md").read_text()
     assert 'class="badge unsandboxed"' in (tmp_path / "lb" / "index.html").read_text()
+
+
+def test_an_evaluation_hides_its_data_set_results_cache_and_scene_folders(tiny_dataset, tmp_path):
+    from main_bench.episodes.dataset import read_manifest
+    from main_bench.evaluation.sandbox import evaluation_sandbox
+    from main_bench.evaluation.settings import EvalSettings
+
+    dataset, cache = tiny_dataset
+    manifest = read_manifest(dataset)
+    settings = EvalSettings(episodes=dataset, split="val", agent=GOOD, out=tmp_path / "out", cache_dir=cache)
+    box = evaluation_sandbox(settings, manifest)
+    scenes = {str(Path(e.path).parent.resolve()) for e in manifest.scenes.values() if e.path}
+    assert scenes and box.enabled
+    assert {str(dataset.resolve()), str((tmp_path / "out").resolve()), str(cache.resolve())} | scenes <= set(box.hidden)
+    assert evaluation_sandbox(EvalSettings(**{**settings.__dict__, "sandbox": False}), manifest).enabled is False

@@ -1,7 +1,8 @@
 """A cheating submission (test material for the isolation tests): it reads the data set's answers.
 
 At each reset it looks for `--episodes` and `--seed` on its ancestors' command lines (/proc/<ppid>/cmdline,
-resolved against /proc/<ppid>/cwd), opens the data set's Parquet shards, finds its own episode by its seed
+resolved against /proc/<ppid>/cwd) and for data set folders named by their environment variables and working
+directories (/proc/<ppid>/environ, cwd), opens the data set's Parquet shards, finds its own episode by its seed
 (`episode_seed(evaluation seed, episode id)` equals `EpisodeInfo.seed`) and reads its `target_positions`.
 When it has them it says so on stderr and calls `found` at once (it would steer to them on the gps track);
 when it found nothing it says so and plays exactly like `good_random.py`.
@@ -14,7 +15,7 @@ import os
 import sys
 
 import numpy as np
-from cheat_common import evaluator_option
+from cheat_common import environment_folders, evaluator_option
 
 
 def read_targets(episode_seed_value: int) -> tuple[str, list] | None:
@@ -25,7 +26,7 @@ def read_targets(episode_seed_value: int) -> tuple[str, list] | None:
 
     seeds = [int(s.rsplit("/", 1)[-1]) for s in evaluator_option("--seed") if s.rsplit("/", 1)[-1].isdigit()]
     seeds = seeds or [0]
-    for folder in evaluator_option("--episodes"):
+    for folder in dict.fromkeys([*evaluator_option("--episodes"), *environment_folders("manifest.json")]):
         for path in sorted(glob.glob(os.path.join(folder, "**", "*.parquet"), recursive=True)):
             try:
                 table = pq.read_table(path, columns=["episode_id", "target_positions"]).to_pylist()
