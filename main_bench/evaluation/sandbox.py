@@ -168,7 +168,7 @@ def popen(how: Launch, pass_fds: tuple[int, ...], stdout: int | None, stderr: in
             os.write(write, how.args)  # a few kB: fits the pipe's buffer, so this never blocks
             os.close(write)
             write = -1
-            argv = [a.replace("{args_fd}", str(read)) if a == "{args_fd}" else a for a in argv]
+            argv = [str(read) if a == "{args_fd}" else a for a in argv]
             fds = (*fds, read)
         return subprocess.Popen(argv, pass_fds=fds, stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr,
                                 env=how.env, cwd=how.cwd, start_new_session=True, close_fds=True)
