@@ -109,3 +109,36 @@ def preview(
                "objects": len(loaded.objects), "rooms": len(loaded.rooms)}
     emit("scenes preview", payload, as_json,
          lambda d: f"wrote {d['out']}: {len(d['floors'])} floor(s), {d['rooms']} rooms, {d['objects']} objects")
+
+
+@app.command("import")
+def import_(
+    src: Path = typer.Argument(..., help="Downloaded dataset folder (Habitat layout) or one annotation file."),
+    fmt: str = typer.Option(..., "--format", "-f", help="mp3d, hm3d, replicacad or hssd."),
+    out: Path | None = typer.Option(None, "--out", help="Folder for composed scenes (replicacad, hssd)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace objects sidecars not written by an import."),
+    up: str = UpOption,
+    scale: float | None = ScaleOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Read a dataset's object annotations into `<scene>.objects.json` sidecars (categories, boxes, rooms)."""
+    from ..scenes.importers import import_scenes
+    from ..scenes.importers.categories import CATEGORY_TABLE_VERSION
+    from .common import check_up
+
+    done = import_scenes(fmt, src, out=out, up=check_up(up), scale=scale, overwrite=overwrite)
+    payload = {"format": fmt, "src": str(src), "category_table_version": CATEGORY_TABLE_VERSION,
+               "scenes": [d.summary() for d in done]}
+    emit("scenes import", payload, as_json, _render_import)
+
+
+def _render_import(d: dict) -> str:
+    lines = [f"imported {len(d['scenes'])} scene(s) from {d['src']} ({d['format']}, category table "
+             f"v{d['category_table_version']})"]
+    for s in d["scenes"]:
+        skipped = ", ".join(f"{n} {why}" for why, n in s["skipped"].items())
+        lines.append(f"  {s['scene_id']}: {s['objects']} objects in {len(s['categories'])} categories, "
+                     f"{s['rooms']} rooms, {s['floors']} floors -> {s['sidecar']}"
+                     + (f" (left out: {skipped})" if skipped else ""))
+        lines += [f"    note: {n}" for n in s["notes"]]
+    return "\n".join(lines)

@@ -38,6 +38,8 @@ class GenerationReport:
     episodes_per_scene: dict[str, int]
     seconds: float
     manifest_hash: str
+    point_goal_episodes: int = 0
+    point_goal_scenes: dict[str, dict[str, Any]] | None = None
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict."""
@@ -51,6 +53,11 @@ class GenerationReport:
         lines = [f"{self.produced} of {self.requested} episodes in {self.shards} shards "
                  f"({self.shards_written} written, {self.shards_reused} reused) -> {self.out} "
                  f"[{self.seconds:.1f} s]"]
+        if self.point_goal_episodes:
+            scenes = self.point_goal_scenes or {}
+            lines.append(f"{self.point_goal_episodes} of {self.produced} episodes fell back to point goals, on "
+                         f"{len(scenes)} scene(s):")
+            lines += [f"  {sid}: {v['episodes']} episodes: {v['reason']}" for sid, v in scenes.items()]
         for s in self.shortfalls:
             lines.append(f"  shortfall {s['split']}/{s['scene_id']} {s['task']} N={s['agents']} "
                          f"shard {s['shard']}: {s['reason']}")
@@ -78,7 +85,8 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
         entries.append({"path": s.rel_path, "split": s.split, "scene_id": s.scene_id, "task": s.task,
                         "agents": s.agents, "shard": s.shard, "requested": s.count, "rows": rows,
                         "sha256": sha256_file(path), "reason": report.get("reason", ""),
-                        "rejections": report.get("rejections", {}), "written": written})
+                        "rejections": report.get("rejections", {}), "written": written,
+                        "point_goals": report.get("point_goals", "")})
     return entries
 
 
@@ -210,4 +218,5 @@ def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], o
         out=out, requested=sum(s.count for s in shards), produced=doc["episodes"], shards=len(shards),
         shards_written=sum(e["written"] for e in entries), shards_reused=sum(not e["written"] for e in entries),
         shortfalls=tuple(doc["shortfalls"]), episodes_per_scene=doc["episodes_per_scene"],
-        seconds=time.perf_counter() - started, manifest_hash=sha256_file(out / MANIFEST_NAME))
+        seconds=time.perf_counter() - started, manifest_hash=sha256_file(out / MANIFEST_NAME),
+        point_goal_episodes=doc["point_goal_episodes"], point_goal_scenes=doc["point_goal_scenes"])

@@ -118,8 +118,12 @@ def build_manifest(ident: dict, shards: list[dict]) -> dict:
         for s in shards if s["rows"] < s["requested"]
     ]
     per_scene: dict[str, int] = {}
+    point_goals: dict[str, dict[str, Any]] = {}
     for s in shards:
         per_scene[s["scene_id"]] = per_scene.get(s["scene_id"], 0) + s["rows"]
+        if s.get("point_goals") and s["rows"]:
+            entry = point_goals.setdefault(s["scene_id"], {"episodes": 0, "reason": s["point_goals"]})
+            entry["episodes"] += s["rows"]
     return {
         **ident,
         "toolkit_version": __version__,
@@ -128,6 +132,8 @@ def build_manifest(ident: dict, shards: list[dict]) -> dict:
         "episodes_per_scene": dict(sorted(per_scene.items())),
         "shards": [{k: s[k] for k in ShardEntry.__dataclass_fields__} for s in shards],
         "shortfalls": shortfalls,
+        "point_goal_episodes": sum(v["episodes"] for v in point_goals.values()),
+        "point_goal_scenes": dict(sorted(point_goals.items())),
     }
 
 

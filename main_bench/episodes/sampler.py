@@ -51,6 +51,7 @@ class SampleReport:
     candidates: int = 0
     rejections: dict[str, int] = field(default_factory=dict)
     reason: str = ""
+    point_goals: str = ""  # why the episodes have point goals instead of object goals ("" for object goals)
 
     def reject(self, reason: str, n: int) -> None:
         if n:
@@ -59,7 +60,8 @@ class SampleReport:
     def to_json(self) -> dict:
         """JSON-ready dict."""
         return {"requested": self.requested, "produced": self.produced, "candidates": self.candidates,
-                "rejections": dict(sorted(self.rejections.items())), "reason": self.reason}
+                "rejections": dict(sorted(self.rejections.items())), "reason": self.reason,
+                "point_goals": self.point_goals}
 
 
 class _Pool:
@@ -161,6 +163,7 @@ def sample_episodes(bank: TargetBank, settings: GenerationSettings, task: str, n
     if bank.has_objects:
         targets = list(bank.objects)
     else:
+        report.point_goals = bank.point_goal_reason()
         per_target = n_agents if task == "individual" else 1
         wanted = math.ceil(count * per_target / settings.point_goal_episodes) + n_agents
         targets = bank.point_targets(wanted, rng)

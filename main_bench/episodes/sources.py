@@ -9,6 +9,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..scenes.loader import SCENE_SUFFIXES, scene_content_hash
+from ..scenes.naming import scene_id_of
 
 
 @dataclass(frozen=True)
@@ -46,12 +47,26 @@ def split_map(split_file: Any) -> dict[str, str]:
     return out
 
 
-def _load_split_file(path: Path | None) -> dict[str, str] | None:
+def _load_split_file(path: Path | None) -> tuple[dict[str, str] | None, Any]:
+    """({scene_id: split} of the listed ids, the SplitFile itself for its id ranges) or (None, None)."""
     if path is None:
-        return None
+        return None, None
     from ..scenes import builtin
 
-    return split_map(builtin.load_split_file(path))
+    split_file = builtin.load_split_file(path)
+    return split_map(split_file), split_file
+
+
+def find_scene_files(folder: Path) -> list[Path]:
+    """Scene files of a folder: those directly in it, else those in its subfolders (Habitat's layouts, e.g.
+    `mp3d/<scan>/<scan>.glb`, `hm3d/val/<NNNNN>-<id>/<id>.basis.glb`); semantic meshes are not scenes."""
+    from ..scenes.naming import is_auxiliary_mesh
+
+    def keep(f: Path) -> bool:
+        return f.suffix.lower() in SCENE_SUFFIXES and f.is_file() and not is_auxiliary_mesh(f)
+
+    found = sorted(f for f in folder.iterdir() if keep(f))
+    return found or sorted(f for f in folder.rglob("*") if keep(f))
 
 
 def resolve_sources(scenes: Sequence[str], *, splits_file: Path | None = None, split: str = "val",
@@ -64,7 +79,7 @@ def resolve_sources(scenes: Sequence[str], *, splits_file: Path | None = None, s
     """
     if not scenes:
         raise InputError("no scenes given; pass --scenes builtin, a folder, or scene files")
-    mapping = _load_split_file(splits_file)
+    mapping, split_file = _load_split_file(splits_file)
     if list(scenes) == ["builtin"]:
         from ..scenes import builtin
 
@@ -82,7 +97,7 @@ def resolve_sources(scenes: Sequence[str], *, splits_file: Path | None = None, s
     for item in scenes:
         p = Path(item)
         if p.is_dir():
-            found = sorted(f for f in p.iterdir() if f.suffix.lower() in SCENE_SUFFIXES and f.is_file())
+            found = find_scene_files(p)
             if not found:
                 raise InputError(f"no scene files ({', '.join(SCENE_SUFFIXES)}) in this folder", path=p)
             files.extend(found)
@@ -95,15 +110,15 @@ def resolve_sources(scenes: Sequence[str], *, splits_file: Path | None = None, s
     out: list[SceneSource] = []
     seen: dict[str, Path] = {}
     for f in files:
-        scene_id = f.stem
+        scene_id = scene_id_of(f)
         if scene_id in seen:
             raise InputError(f"two scenes share the id {scene_id!r} ({seen[scene_id]} and {f}); rename one",
                              path=f)
         seen[scene_id] = f
         if mapping is not None:
-            if scene_id not in mapping:
+            s = mapping.get(scene_id) or split_file.split_by_range(scene_id)
+            if s is None:
                 raise InputError(f"scene {scene_id!r} is not in the split file {splits_file}", path=f)
-            s = mapping[scene_id]
         else:
             s = split
         if only_splits and s not in only_splits:

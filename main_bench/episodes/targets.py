@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..scenes.objects import KNOWN_CATEGORIES
 from .goals import goal_points
 from .settings import GenerationSettings
 
@@ -45,6 +46,9 @@ class TargetBank:
         areas = {int(isl.index): float(isl.area) for isl in navmesh.islands}
         self._island_area = areas
         for obj in sorted(scene.objects, key=lambda o: o.instance_id):
+            if obj.category not in KNOWN_CATEGORIES:  # a target observation is an index into KNOWN_CATEGORIES
+                self._exclude("object of a category the toolkit does not know (kept in the sidecar)")
+                continue
             points = goal_points(navmesh, obj, settings)
             if len(points) == 0:
                 self._exclude("object without a navigable goal point")
@@ -57,6 +61,16 @@ class TargetBank:
                 self._exclude(f"object on an island under {settings.min_island_area:g} m^2")
                 continue
             self.objects.append(Target(obj.instance_id, obj.category, island, _mode(navmesh.floor_of(points)), points))
+
+    def point_goal_reason(self) -> str:
+        """Why this scene's episodes have point goals: what its semantic objects are missing."""
+        from ..scenes.objects import sidecar_path
+
+        path = self.scene.path
+        if path is not None and sidecar_path(path).is_file():
+            return f"its objects sidecar {sidecar_path(path).name} lists no objects"
+        return ("no semantic objects: no objects sidecar beside the scene file (run `main-bench scenes import` for "
+                "Matterport3D/HM3D/ReplicaCAD/HSSD data) and no mesh node named after a known category")
 
     def _exclude(self, reason: str) -> None:
         self.excluded[reason] = self.excluded.get(reason, 0) + 1

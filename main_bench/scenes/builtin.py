@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -32,6 +32,17 @@ class SplitFile:
     splits: Mapping[str, tuple[str, ...]]
     generator_version: str | None = None
     path: Path | None = None
+    ranges: Mapping[str, tuple[str, str]] = field(default_factory=dict)
+
+    def split_by_range(self, scene_id: str) -> str | None:
+        """The split whose id range holds `scene_id`'s number prefix (HM3D's `00800-<id>`), else None."""
+        number = scene_id.split("-", 1)[0]
+        if not number.isdigit():
+            return None
+        for split, (lo, hi) in self.ranges.items():
+            if len(number) == len(lo) and lo <= number <= hi:
+                return split
+        return None
 
     @property
     def scene_ids(self) -> tuple[str, ...]:
@@ -43,6 +54,9 @@ class SplitFile:
         for split, ids in self.splits.items():
             if scene_id in ids:
                 return split
+        by_range = self.split_by_range(scene_id)
+        if by_range is not None:
+            return by_range
         raise InputError(f"scene {scene_id!r} is in no split of {self.name!r}", path=self.path)
 
 
@@ -77,7 +91,26 @@ def _parse(doc: Any, path: Path) -> SplitFile:
             seen[scene_id] = split
         out[str(split)] = tuple(ids)
     version = doc.get("generator_version")
-    return SplitFile(str(doc.get("name", path.stem)), source, out, None if version is None else str(version), path)
+    return SplitFile(str(doc.get("name", path.stem)), source, out, None if version is None else str(version), path,
+                     _ranges(doc.get("ranges", {}), path))
+
+
+def _ranges(raw: Any, path: Path) -> dict[str, tuple[str, str]]:
+    """`ranges`: {split: [first, last]} of equal-length number prefixes (HM3D ids `00800-<id>`), disjoint."""
+    if not isinstance(raw, dict):
+        raise InputError("'ranges' must map split names to [first, last] number prefixes", path=path)
+    out: dict[str, tuple[str, str]] = {}
+    for split, pair in raw.items():
+        ok = (isinstance(pair, list) and len(pair) == 2 and all(isinstance(v, str) and v.isdigit() for v in pair)
+              and len(pair[0]) == len(pair[1]) and pair[0] <= pair[1])
+        if not ok:
+            raise InputError(f"range of split {split!r} must be [first, last], equal-length digit strings with "
+                             f"first <= last, got {pair!r}", path=path)
+        for other, (lo, hi) in out.items():
+            if len(lo) == len(pair[0]) and not (pair[1] < lo or hi < pair[0]):
+                raise InputError(f"ranges of splits {other!r} and {split!r} overlap", path=path)
+        out[str(split)] = (pair[0], pair[1])
+    return out
 
 
 def builtin_split() -> SplitFile:
@@ -88,6 +121,11 @@ def builtin_split() -> SplitFile:
 def mp3d_split() -> SplitFile:
     """The standard Matterport3D scene-level split (61 train / 11 val / 18 test scene ids)."""
     return _packaged("mp3d.json")
+
+
+def hm3d_split() -> SplitFile:
+    """The HM3D scene-level split by scene number (train 00000-00799, val 00800-00899, test 00900-00999)."""
+    return _packaged("hm3d.json")
 
 
 def _packaged(name: str) -> SplitFile:

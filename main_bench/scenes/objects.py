@@ -24,11 +24,37 @@ KNOWN_CATEGORIES: tuple[str, ...] = (
     "dishwasher", "dresser", "fireplace", "lamp", "microwave", "nightstand", "oven", "piano", "picture",
     "plant", "refrigerator", "shelf", "shower", "sink", "sofa", "stool", "table", "toilet", "towel", "tv",
     "wardrobe", "washing_machine", "exercise_equipment", "seating", "stove", "armchair", "coffee_table",
+    # Appended (ids above keep their index): Matterport3D mpcat40 categories with no equivalent above, trash cans.
+    "curtain", "mirror", "lighting", "blinds", "board_panel", "furniture", "appliances", "clothes", "objects",
+    "trash_can",
 )
 
+#: Known categories too generic to be read from a node name (a node called "Objects" or "Furniture" is a group).
+_GENERIC = frozenset({"objects", "furniture", "appliances", "clothes", "board_panel", "lighting"})
+_NAMEABLE = frozenset(KNOWN_CATEGORIES) - _GENERIC
+
+#: Other names of known categories, as they appear in asset and node names (after splitting into lower-case words).
 _SYNONYMS = {
-    "couch": "sofa", "fridge": "refrigerator", "television": "tv", "fitness_equipment": "exercise_equipment",
-    "night_stand": "nightstand", "potted_plant": "plant", "washer": "washing_machine", "bookcase": "bookshelf",
+    "couch": "sofa", "settee": "sofa", "loveseat": "sofa", "love_seat": "sofa",
+    "fridge": "refrigerator", "freezer": "refrigerator",
+    "television": "tv", "tv_monitor": "tv", "tele": "tv",
+    "fitness_equipment": "exercise_equipment", "gym_equipment": "exercise_equipment", "treadmill": "exercise_equipment",
+    "night_stand": "nightstand", "bedside_table": "nightstand", "night_table": "nightstand",
+    "potted_plant": "plant", "houseplant": "plant", "house_plant": "plant", "flower_pot": "plant", "flowers": "plant",
+    "washer": "washing_machine", "bookcase": "bookshelf", "book_case": "bookshelf",
+    "portrait": "picture", "painting": "picture", "poster": "picture", "photo": "picture",
+    "photograph": "picture", "artwork": "picture", "wall_art": "picture", "picture_frame": "picture",
+    "photo_frame": "picture",
+    "trashcan": "trash_can", "garbage_can": "trash_can", "garbage_bin": "trash_can", "waste_bin": "trash_can",
+    "wastebasket": "trash_can", "waste_basket": "trash_can", "bin": "trash_can", "trash": "trash_can",
+    "dustbin": "trash_can", "rubbish_bin": "trash_can", "trash_bin": "trash_can",
+    "pillow": "cushion", "throw_pillow": "cushion",
+    "ottoman": "stool", "footstool": "stool", "bench": "seating",
+    "washbasin": "sink", "wash_basin": "sink", "basin": "sink",
+    "bath": "bathtub", "bath_tub": "bathtub", "tub": "bathtub",
+    "wc": "toilet", "cooktop": "stove", "cooker": "stove", "hob": "stove",
+    "microwave_oven": "microwave", "cupboard": "cabinet", "drawers": "chest_of_drawers",
+    "arm_chair": "armchair", "shelves": "shelf", "shelving": "shelf", "closet": "wardrobe",
 }
 _WORDS = re.compile(r"[A-Z]+(?=[A-Z][a-z])|[A-Z]?[a-z]+|[A-Z]+")
 
@@ -107,7 +133,9 @@ def category_from_node_name(name: str) -> str | None:
     """The known category a node name denotes, else None.
 
     Accepts `chair_3`, `obj:chair:3`, `coffee_table.001` and CamelCase asset names such as `ChairA_01_001`,
-    `NightStand_01_002` or `TVCabinet_01_001` (the last word decides: cabinet).
+    `NightStand_01_002` or `TVCabinet_01_001` (the last word decides: cabinet); numbers and a trailing variant
+    letter are ignored (`Portrait_3`, `SofaC`), and `_SYNONYMS` maps other names (`TrashCan`, `bin`, `painting`).
+    The generic categories (`objects`, `furniture`, ...) are not read from node names.
     """
     words = [w.lower() for w in _WORDS.findall(name) if w.lower() != "obj"]
     if words and len(words[-1]) == 1 and len(words) > 1:  # variant letter: ChairA, SofaC
@@ -117,6 +145,6 @@ def category_from_node_name(name: str) -> str | None:
     candidates = ["_".join(words), "".join(words), "_".join(words[-2:]), "".join(words[-2:]), words[-1]]
     for cand in candidates:
         cand = _SYNONYMS.get(cand, cand)
-        if cand in KNOWN_CATEGORIES:
+        if cand in _NAMEABLE:
             return cand
     return None
