@@ -149,7 +149,11 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
                          path=path)
 
     is_gltf = path.suffix.lower() in (".glb", ".gltf")
-    up_axis, up_reason = _decide_up(vertices, faces_all, up, is_gltf)
+    declared = _sidecar_up(path) if up == "auto" else None
+    if declared is not None:
+        up_axis, up_reason = declared, "objects sidecar (written by `scenes import`) says so"
+    else:
+        up_axis, up_reason = _decide_up(vertices, faces_all, up, is_gltf)
     transform = Y_UP_TO_Z_UP.copy() if up_axis == "y" else np.eye(4)
     extents = np.ptp(vertices, axis=0)
     height = float(extents[1] if up_axis == "y" else extents[2])
@@ -197,6 +201,15 @@ def _flatten(loaded: trimesh.Scene) -> tuple[list[trimesh.Trimesh], list[str]]:
         parts.append(mesh)
         names.append(str(node))
     return parts, names
+
+
+def _sidecar_up(path: Path) -> Literal["y", "z"] | None:
+    """The up axis an imported sidecar records for its scene file (`up_axis`), else None."""
+    side = sidecar_path(path)
+    if not side.is_file():
+        return None
+    axis = read_sidecar(side).get("up_axis")
+    return axis if axis in ("y", "z") else None
 
 
 def _decide_up(vertices: np.ndarray, faces: np.ndarray, up: UpAxis, is_gltf: bool) -> tuple[Literal["y", "z"], str]:

@@ -8,7 +8,7 @@ In: a downloaded dataset folder (Habitat layout) or one annotation file, and a f
   composed into one `<name>.glb` in an output folder (module `replicacad`).
 
 Out: `<scene>.objects.json` beside each scene file (written atomically; canonical frame; categories through the
-versioned table of `categories`), which `load_scene` then reads like any sidecar.
+versioned table of `categories`; `up_axis`: the scene file's up axis, which `load_scene(up="auto")` then uses).
 """
 
 from __future__ import annotations
@@ -39,13 +39,13 @@ def import_scenes(fmt: str, src: str | Path, *, out: str | Path | None = None, u
         from . import mp3d
 
         for scene, house in mp3d.find_scans(src):
-            frame = scene_frame(scene, up, scale)
+            frame = scene_frame(scene, _habitat_up(up), scale)
             done.append(mp3d.read_house(house, frame, scene_id_of(scene), scene))
     elif fmt == "hm3d":
         from . import hm3d
 
         for scene, txt, mesh in hm3d.find_scans(src):
-            frame = scene_frame(scene, up, scale)
+            frame = scene_frame(scene, _habitat_up(up), scale)
             done.append(hm3d.read_scan(scene, txt, mesh, frame, scene_id_of(scene)))
     else:
         from . import replicacad
@@ -55,11 +55,13 @@ def import_scenes(fmt: str, src: str | Path, *, out: str | Path | None = None, u
         for instance in replicacad.find_instances(src):
             imported = replicacad.compose(instance, Path(out))
             imported.fmt = fmt
-            seen = scene_frame(imported.scene_path, up, scale)
-            if seen.up_axis != imported.frame.up_axis:
-                imported.notes.append(f"the loader reads {imported.scene_path.name} as +{seen.up_axis.upper()} up; "
-                                      "pass --up y to the commands that load it")
             done.append(imported)
     for imported in done:
         write_sidecar(imported, overwrite=overwrite)
     return done
+
+
+def _habitat_up(up: str) -> str:
+    """Matterport3D and HM3D meshes are +Z up (Habitat loads them with gravity along -Z), whatever glTF says;
+    the sidecar records it so that `load_scene(up="auto")` reads the mesh the same way."""
+    return "z" if up == "auto" else up

@@ -110,7 +110,7 @@ class ImportedScene:
             "schema_version": OBJECTS_SCHEMA_VERSION, "scene_id": self.scene_id,
             "generator": f"{GENERATOR} {self.fmt}", "category_table_version": CATEGORY_TABLE_VERSION,
             "sources": self.sources, "frame": "canonical: right-handed, +Z up, metres",
-            "file_up_axis": self.frame.up_axis, "file_scale": self.frame.scale,
+            "up_axis": self.frame.up_axis, "file_scale": self.frame.scale,
             "objects": self.objects, "rooms": self.rooms, "floors": self.floors, "skipped": dict(sorted(self.skipped.items())),
         }
 
