@@ -77,7 +77,7 @@ def write_mp3d(house: House, root: Path, scan: str) -> Path:
     folder = root / scan
     folder.mkdir(parents=True, exist_ok=True)
     (folder / f"{scan}.glb").write_bytes(_scene_glb(_groups(house), y_up=False))
-    cats = sorted({mpcat40_of(f.category) for f in house.furniture} | {"wall"})
+    cats = sorted({f.category for f in house.furniture} | {"wall"})  # raw categories, each with its mpcat40
     cat_index = {c: i for i, c in enumerate(cats)}
     rooms = {r.name: i for i, r in enumerate(house.rooms)}
     lo, hi = np.array(house.footprint[:2] + (0.0,)), np.array(house.footprint[2:] + (6.0,))
@@ -94,8 +94,8 @@ def write_mp3d(house: House, root: Path, scan: str) -> Path:
                      f"{(y0 + y1) / 2:.4f} {r.floor_z:.4f}  {x0:.4f} {y0:.4f} {r.floor_z:.4f} {x1:.4f} {y1:.4f} "
                      f"{r.floor_z + r.height:.4f}  {r.height:.4f} 0 0 0 0")
     for c, i in cat_index.items():
-        raw = "wall" if c == "wall" else next(f.category for f in house.furniture if mpcat40_of(f.category) == c)
-        lines.append(f"C {i} {100 + i} {raw.replace('_', '#')} {MPCAT40_NAMES.index(c)} {c} 0 0 0 0 0")
+        mp = mpcat40_of(c)
+        lines.append(f"C {i} {100 + i} {c.replace('_', '#')} {MPCAT40_NAMES.index(mp)} {mp} 0 0 0 0 0")
     for k, f in enumerate(house.furniture):
         c = (np.array(f.bbox_min) + np.array(f.bbox_max)) / 2
         r = (np.array(f.bbox_max) - np.array(f.bbox_min)) / 2
@@ -104,7 +104,7 @@ def write_mp3d(house: House, root: Path, scan: str) -> Path:
         else:
             a0, a1, radii = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), tuple(r)
         nums = [*c, *a0, *a1, *radii]
-        lines.append(f"O {k} {rooms.get(f.room, -1)} {cat_index[mpcat40_of(f.category)]}  "
+        lines.append(f"O {k} {rooms.get(f.room, -1)} {cat_index[f.category]}  "
                      + " ".join(f"{v:.5f}" for v in nums) + "  0 0 0 0 0 0 0 0")
     k = len(house.furniture)
     lines.append(f"O {k} 0 {cat_index['wall']}  1 1 1  1 0 0  0 1 0  0.1 1 1  0 0 0 0 0 0 0 0")
