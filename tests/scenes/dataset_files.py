@@ -14,6 +14,7 @@ import numpy as np
 import trimesh
 
 from main_bench.scenes.importers.categories import MPCAT40
+from main_bench.scenes.objects import KNOWN_CATEGORIES
 from main_bench.scenes.procedural.export import Z_UP_TO_Y_UP, boxes_to_arrays
 from main_bench.scenes.procedural.model import House
 
@@ -162,12 +163,11 @@ def write_replicacad(house: House, root: Path, name: str) -> Path:
     (root / "semantics").mkdir(parents=True, exist_ok=True)
     (root / "replicaCAD.scene_dataset_config.json").write_text("{}\n")
     stage = [(n, v, f, c) for n, v, f, c in _groups(house) if n not in {fu.name for fu in house.furniture}]
-    (root / "stages" / "house_stage.glb").write_bytes(_scene_glb(stage, y_up=True))
-    (root / "stages" / "house_stage.stage_config.json").write_text(json.dumps({"render_asset": "house_stage.glb"}))
-    cats = sorted({f.category for f in house.furniture})
-    ids = {c: 10 + i for i, c in enumerate(cats)}
+    (root / "stages" / f"{name}_stage.glb").write_bytes(_scene_glb(stage, y_up=True))
+    (root / "stages" / f"{name}_stage.stage_config.json").write_text(json.dumps({"render_asset": f"{name}_stage.glb"}))
+    ids = {c: 10 + i for i, c in enumerate(KNOWN_CATEGORIES)}  # one lexicon for every scene of the dataset
     (root / "semantics" / "replicaCAD_semantic_lexicon.json").write_text(
-        json.dumps({"classes": [{"name": "wall", "id": 1}] + [{"name": c, "id": ids[c]} for c in cats]}))
+        json.dumps({"classes": [{"name": "wall", "id": 1}] + [{"name": c, "id": i} for c, i in ids.items()]}))
     instances = []
     for k, f in enumerate(house.furniture):
         v, faces, colours = boxes_to_arrays(f.parts)
@@ -176,19 +176,20 @@ def write_replicacad(house: House, root: Path, name: str) -> Path:
         turn = 90.0 if k % 2 else 0.0
         offset = np.array([0.3, 0.0, 0.0]) if k % 3 else np.zeros(3)
         local = (world - centre) @ _rot_y(-turn).T + offset
-        asset = f"{f.name}.glb"
+        template = f"{name}_{f.name}"
+        asset = f"{template}.glb"
         mesh = trimesh.Trimesh(vertices=local.astype(np.float32), faces=faces, vertex_colors=colours, process=False)
         (root / "objects" / asset).write_bytes(trimesh.Scene(mesh).export(file_type="glb"))
-        (root / "objects" / f"{f.name}.object_config.json").write_text(
+        (root / "objects" / f"{template}.object_config.json").write_text(
             json.dumps({"render_asset": asset, "semantic_id": ids[f.category], "mass": 1.0}))
-        inst = {"template_name": f"objects/{f.name}", "rotation": _quat_y(turn), "motion_type": "STATIC"}
+        inst = {"template_name": f"objects/{template}", "rotation": _quat_y(turn), "motion_type": "STATIC"}
         if k % 3 == 2:
             inst["translation_origin"] = "COM"
             inst["translation"] = [float(x) for x in centre]
         else:
             inst["translation"] = [float(x) for x in centre - _rot_y(turn) @ offset]
         instances.append(inst)
-    doc = {"stage_instance": {"template_name": "stages/house_stage"}, "translation_origin": "asset_local",
+    doc = {"stage_instance": {"template_name": f"stages/{name}_stage"}, "translation_origin": "asset_local",
            "object_instances": instances,
            "articulated_object_instances": [{"template_name": "fridge", "translation": [0, 0, 0]}]}
     path = root / "scenes" / f"{name}.scene_instance.json"
