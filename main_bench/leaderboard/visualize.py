@@ -29,8 +29,39 @@ def agent_blues(n: int) -> list[tuple]:
     return [cmap(v) for v in np.linspace(0.95, 0.5, max(n, 1))][:n]
 
 
-def occupancy(view: EpisodeView) -> tuple[np.ndarray, tuple[float, float, float, float]] | None:
-    """(ny, nx) image of the navigable cells on the episode's start floor and its extent, or None."""
+def episode_floors(view: EpisodeView) -> list[int]:
+    """The navmesh floors the episode touches (starts, targets, walked paths), lowest first; [] when the scene
+    has one floor or no navmesh."""
+    nav = view.navmesh
+    if nav is None or len(getattr(nav, "floors", ())) <= 1:
+        return []
+    used = set(view.episode.start_floors) | set(view.episode.target_floors)
+    for walked in view.paths_walked:
+        if len(walked):
+            used |= {int(f) for f in np.unique(nav.floor_of(walked))}
+    return sorted(int(f) for f in used if f >= 0)
+
+
+def _on_floor(view: EpisodeView, points: np.ndarray, floor: int | None) -> np.ndarray:
+    """(K,) mask of the points on `floor` (all True when `floor` is None)."""
+    if floor is None or view.navmesh is None or len(points) == 0:
+        return np.ones(len(points), dtype=bool)
+    return np.asarray(view.navmesh.floor_of(points)) == floor
+
+
+def _masked(view: EpisodeView, path: np.ndarray, floor: int | None) -> np.ndarray:
+    """The path with its points on other floors set to NaN (so lines break there)."""
+    keep = _on_floor(view, path, floor)
+    if keep.all():
+        return path
+    out = np.asarray(path, dtype=np.float64).copy()
+    out[~keep] = np.nan
+    return out
+
+
+def occupancy(view: EpisodeView, floor: int | None = None) -> tuple[np.ndarray, tuple[float, float, float, float]] | None:
+    """(ny, nx) image of the navigable cells on `floor` (default: the episode's start floor) and its extent,
+    or None."""
     nav = view.navmesh
     if nav is None:
         return None
@@ -38,7 +69,7 @@ def occupancy(view: EpisodeView) -> tuple[np.ndarray, tuple[float, float, float,
     ix, iy = nav.cell_indices()
     keep = np.ones(len(ix), dtype=bool)
     if len(getattr(nav, "floors", ())) > 1:
-        keep = nav.cell_floor() == view.episode.start_floors[0]
+        keep = nav.cell_floor() == (view.episode.start_floors[0] if floor is None else floor)
     img = np.zeros((ny, nx), dtype=np.float32)
     img[iy[keep], ix[keep]] = 1.0
     return img, (x0, x0 + nx * cs, y0, y0 + ny * cs)
@@ -64,11 +95,12 @@ def _flag(ax, x: float, y: float, size: float, label: str | None = None) -> None
         ax.text(x + 0.75 * size, y + 0.8 * size, label, fontsize=7, color="#7f0000", zorder=7)
 
 
-def draw_background(ax, view: EpisodeView) -> None:
-    """Everything of the picture that does not move: navigable cells, shortest paths, targets, starts."""
+def draw_background(ax, view: EpisodeView, floor: int | None = None) -> None:
+    """Everything of the picture that does not move: navigable cells, shortest paths, targets, starts (those on
+    `floor` only, when given)."""
     ep = view.episode
     x0, x1, y0, y1 = view_bounds(view)
-    occ = occupancy(view)
+    occ = occupancy(view, floor)
     if occ is not None:
         img, extent = occ
         ax.imshow(img, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=3.5, interpolation="nearest",
@@ -76,12 +108,18 @@ def draw_background(ax, view: EpisodeView) -> None:
     size = 0.05 * max(x1 - x0, y1 - y0)
     for path in view.shortest_paths:
         if path is not None:
+            path = _masked(view, path, floor)
             ax.plot(path[:, 0], path[:, 1], color=SHORTEST_GREEN, linewidth=2.2, alpha=0.85, zorder=2)
     shared = ep.task == "shared" or np.allclose(ep.target_positions, ep.target_positions[0])
     targets = ep.target_positions[:1] if shared else ep.target_positions
+    target_here = _on_floor(view, targets, floor)
     for k, t in enumerate(targets):
-        _flag(ax, t[0], t[1], size, None if shared else f"T{k}")
+        if target_here[k]:
+            _flag(ax, t[0], t[1], size, None if shared else f"T{k}")
+    start_here = _on_floor(view, ep.start_positions, floor)
     for i, s in enumerate(ep.start_positions):
+        if not start_here[i]:
+            continue
         ax.scatter([s[0]], [s[1]], s=90, color=START_YELLOW, edgecolors="black", linewidths=0.8, zorder=5)
         ax.text(s[0], s[1], str(i), fontsize=6, ha="center", va="center", zorder=6)
     ax.set_xlim(x0, x1)
@@ -91,29 +129,39 @@ def draw_background(ax, view: EpisodeView) -> None:
     ax.set_ylabel("y (m)")
 
 
-def draw_walked(ax, view: EpisodeView) -> list:
-    """One line per agent for its walked path (full length); returns the Line2D objects (agent order)."""
+def draw_walked(ax, view: EpisodeView, floor: int | None = None) -> list:
+    """One line per agent for its walked path (full length, or its part on `floor`); returns the Line2D
+    objects (agent order)."""
     blues = agent_blues(view.episode.num_agents)
     lines = []
     for i, walked in enumerate(view.paths_walked):
+        walked = _masked(view, walked, floor)
         (line,) = ax.plot(walked[:, 0], walked[:, 1], color=blues[i], linewidth=2.0, zorder=3)
         lines.append(line)
     return lines
 
 
-def draw_failures(ax, view: EpisodeView) -> None:
-    """A red cross where each failed agent stopped."""
+def draw_failures(ax, view: EpisodeView, floor: int | None = None) -> None:
+    """A red cross where each failed agent stopped (on `floor`, when given)."""
     for i in view.failed_agents:
         if i < len(view.paths_walked) and len(view.paths_walked[i]):
             e = view.paths_walked[i][-1]
+            if not _on_floor(view, e.reshape(1, 3), floor)[0]:
+                continue
             ax.scatter([e[0]], [e[1]], marker="x", s=110, color=FAILED_RED, linewidths=2.6, zorder=7)
 
 
-def draw_episode(ax, view: EpisodeView) -> None:
-    """Draw the whole episode on `ax` (MAIN Fig. 6)."""
-    draw_background(ax, view)
-    draw_walked(ax, view)
-    draw_failures(ax, view)
+def draw_episode(ax, view: EpisodeView, floor: int | None = None) -> None:
+    """Draw the whole episode on `ax` (MAIN Fig. 6), or its part on `floor`."""
+    draw_background(ax, view, floor)
+    draw_walked(ax, view, floor)
+    draw_failures(ax, view, floor)
+
+
+def floor_title(view: EpisodeView, floor: int) -> str:
+    """`floor 1 (z = 2.86 m)`: a panel's floor and its height."""
+    z = float(view.navmesh.floors[floor].z)
+    return f"floor {floor} (z = {z + 0.0 if abs(z) >= 0.005 else 0.0:.2f} m)"
 
 
 def legend_handles(n: int) -> list[Line2D]:
@@ -140,16 +188,32 @@ def episode_title(view: EpisodeView, note: bool = True) -> str:
 
 
 def episode_figure(view: EpisodeView):
-    """(figure, map axes) of the episode's top-down picture, title and legend included (caller closes it)."""
+    """(figure, map axes) of the episode's top-down picture, title and legend included (caller closes it).
+
+    An episode on a building with several floors gets one panel per floor it touches, each labelled with the
+    floor's height; the axes returned are then the panel of agent 0's start floor."""
     x0, x1, y0, y1 = view_bounds(view)
     aspect = (y1 - y0) / max(x1 - x0, 1e-6)
-    fig, ax = plt.subplots(figsize=(7.5, max(3.5, min(12.0, 6.0 * aspect)) + 0.9))
-    draw_episode(ax, view)
-    ax.set_title(episode_title(view), fontsize=9)
-    ax.legend(handles=legend_handles(view.episode.num_agents), fontsize=7, loc="upper left",
-              bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    floors = episode_floors(view)
+    height = max(3.5, min(12.0, 6.0 * aspect)) + 0.9
+    if not floors:
+        fig, ax = plt.subplots(figsize=(7.5, height))
+        draw_episode(ax, view)
+        ax.set_title(episode_title(view), fontsize=9)
+        main = last = ax
+    else:
+        fig, axes = plt.subplots(1, len(floors), figsize=(6.0 * len(floors) + 1.5, height), squeeze=False)
+        for ax, floor in zip(axes[0], floors, strict=True):
+            draw_episode(ax, view, floor)
+            ax.set_title(floor_title(view, floor), fontsize=9)
+        fig.suptitle(episode_title(view), fontsize=9)
+        start = int(view.episode.start_floors[0])
+        main = axes[0][floors.index(start)] if start in floors else axes[0][0]
+        last = axes[0][-1]
+    last.legend(handles=legend_handles(view.episode.num_agents), fontsize=7, loc="upper left",
+                bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     fig.tight_layout()
-    return fig, ax
+    return fig, main
 
 
 def episode_png(view: EpisodeView, dpi: int = 120) -> bytes:

@@ -38,6 +38,8 @@ def agent_frame(dataset: str | Path) -> pd.DataFrame:
         "euclidean": np.concatenate([np.asarray(v, dtype=np.float64) for v in cols["euclidean_distances"]]),
         "start_x": starts[:, 0], "start_y": starts[:, 1], "start_z": starts[:, 2],
         "target_x": targets[:, 0], "target_y": targets[:, 1], "target_z": targets[:, 2],
+        "start_floor": np.concatenate([np.asarray(v, dtype=np.int64).reshape(-1) for v in cols["start_floors"]]),
+        "target_floor": np.concatenate([np.asarray(v, dtype=np.int64).reshape(-1) for v in cols["target_floors"]]),
     })
     return frame.sort_values(["episode_id", "agent_index"], kind="stable").reset_index(drop=True)
 
