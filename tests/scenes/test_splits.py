@@ -10,13 +10,13 @@ from mb_testing import REPO
 from scene_fixtures import house
 
 from main_bench.errors import InputError
-from main_bench.scenes.builtin import builtin_split, load_split_file, mp3d_split, seed_of
+from main_bench.scenes.builtin import builtin_split, hm3d_split, load_split_file, mp3d_split, seed_of
 from main_bench.scenes.procedural import GENERATOR_VERSION
 
 MP3D_ID = re.compile(r"^[0-9A-Za-z]{11}$")
 
 
-@pytest.mark.parametrize("name", ["builtin.json", "mp3d.json"])
+@pytest.mark.parametrize("name", ["builtin.json", "mp3d.json", "hm3d.json"])
 def test_repository_copy_is_the_packaged_file(name):
     """episodes/splits/ (what users read) and the copy inside the package are the same document."""
     repo = json.loads((REPO / "episodes" / "splits" / name).read_text())
@@ -48,6 +48,19 @@ def test_every_builtin_split_file_names_this_generator(path):
         assert split.generator_version == GENERATOR_VERSION, f"{path.name}: regenerate its data after a generator change"
 
 
+def test_hm3d_split_by_scene_number():
+    """HM3D's scenes are split by their folder number: 00000-00799 train, 00800-00899 val, 00900-00999 test."""
+    split = hm3d_split()
+    assert split.source == "hm3d" and split.scene_ids == ()
+    assert split.split_of("00000-kfPV7w3FaU5") == "train" and split.split_of("00799-xyzXYZxyz12") == "train"
+    assert split.split_of("00800-TEEsavR23oF") == "val" and split.split_of("00899-58NLZxWBSpk") == "val"
+    assert split.split_of("00900-abcdefghijk") == "test"
+    for other in ("01000-abcdefghijk", "TEEsavR23oF", "0800-TEEsavR23oF"):
+        assert split.split_by_range(other) is None
+        with pytest.raises(InputError, match="is in no split"):
+            split.split_of(other)
+
+
 def test_mp3d_split_is_the_standard_one():
     split = mp3d_split()
     assert split.source == "mp3d"
@@ -67,6 +80,9 @@ def test_mp3d_split_is_the_standard_one():
     ({"schema_version": 1, "splits": {"train": "house_0001"}}, "list of scene id strings"),
     ({"schema_version": 1, "splits": {"train": ["a"], "val": ["a"]}}, "in both 'train' and"),
     ({"schema_version": 1, "source": "builtin", "splits": {"train": ["kitchen"]}}, "house_NNNN"),
+    ({"schema_version": 1, "splits": {"val": []}, "ranges": {"val": ["00800", "899"]}}, "equal-length"),
+    ({"schema_version": 1, "splits": {"val": []}, "ranges": {"val": ["00800", "00899"], "test": ["00850", "00999"]}},
+     "overlap"),
 ])
 def test_bad_split_files(tmp_path, doc, words):
     path = tmp_path / "split.json"
