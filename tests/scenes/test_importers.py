@@ -180,3 +180,18 @@ def test_bad_hm3d_and_replicacad_input(cli, house, tmp_path):
     assert "object template" in err and ".object_config.json" in err
     with pytest.raises(InputError, match="not found"):
         import_scenes("mp3d", tmp_path / "missing")
+
+
+def test_docs_table_is_the_code_table():
+    """docs/datasets.md shows the table the code uses (and says its version)."""
+    from mb_testing import REPO
+
+    from main_bench.scenes.importers.categories import table_rows
+
+    text = (REPO / "docs" / "datasets.md").read_text()
+    assert f"## The category table (version {CATEGORY_TABLE_VERSION})" in text
+    cells = []
+    for line in text.split("## The category table", 1)[1].splitlines():
+        if line.startswith("|") and "---" not in line and "mpcat40 |" not in line:
+            cells += [c.strip() for c in line.strip("|").split("|")]
+    assert list(zip(cells[0::2], cells[1::2], strict=True)) == table_rows()
