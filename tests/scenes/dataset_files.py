@@ -118,9 +118,26 @@ def _colour(i: int) -> int:
     return (i * 7919 + 0x2A3B4C) & 0xFFFFFF
 
 
-def write_hm3d(house: House, root: Path, folder_name: str) -> Path:
+def _textured_glb(groups: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]) -> bytes:
+    """Like `_scene_glb` (+Z up) but coloured through one texture, one texel per group, as HM3D-Semantics v0.2
+    meshes are (`has_semantic_textures`): each group's vertices point at the centre of its texel."""
+    from PIL import Image
+
+    texels = np.array([c[0, :3] for _, _, _, c in groups], dtype=np.uint8).reshape(1, -1, 3)
+    image = Image.fromarray(texels, mode="RGB")
+    scene = trimesh.Scene()
+    for k, (name, v, f, _) in enumerate(groups):
+        uv = np.tile([(k + 0.5) / len(groups), 0.5], (len(v), 1))
+        visual = trimesh.visual.TextureVisuals(uv=uv, image=image)
+        mesh = trimesh.Trimesh(vertices=v.astype(np.float32), faces=f, visual=visual, process=False)
+        scene.add_geometry(mesh, node_name=name, geom_name=name)
+    return scene.export(file_type="glb")
+
+
+def write_hm3d(house: House, root: Path, folder_name: str, textured: bool = False) -> Path:
     """`root/<NNNNN>-<id>/`: `<id>.basis.glb` (the house), `<id>.semantic.glb` (objects in flat colours; both
-    +Z up, as HM3D's meshes are) and `<id>.semantic.txt`; returns the folder. Structure is annotated as "wall" (left out on import)."""
+    +Z up, as HM3D's meshes are; `textured`: colours in a texture instead of per vertex) and `<id>.semantic.txt`;
+    returns the folder. Structure is annotated as "wall" (left out on import)."""
     scan = folder_name.split("-", 1)[1]
     folder = root / folder_name
     folder.mkdir(parents=True, exist_ok=True)
@@ -135,7 +152,7 @@ def write_hm3d(house: House, root: Path, folder_name: str) -> Path:
         category = furniture.category.replace("_", " ") if furniture else "wall"
         region = rooms.get(furniture.room, 0) if furniture else 0
         rows.append(f'{i + 1},{colour:06X},"{category}",{region}')
-    (folder / f"{scan}.semantic.glb").write_bytes(_scene_glb(groups, y_up=False))
+    (folder / f"{scan}.semantic.glb").write_bytes(_textured_glb(groups) if textured else _scene_glb(groups, y_up=False))
     (folder / f"{scan}.semantic.txt").write_text("HM3D Semantic Annotations\n" + "\n".join(rows) + "\n")
     return folder
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 from dataset_files import (
     ROOM_CODES,
     expected_objects,
@@ -195,3 +196,12 @@ def test_docs_table_is_the_code_table():
         if line.startswith("|") and "---" not in line and "mpcat40 |" not in line:
             cells += [c.strip() for c in line.strip("|").split("|")]
     assert list(zip(cells[0::2], cells[1::2], strict=True)) == table_rows()
+
+
+def test_hm3d_semantic_mesh_coloured_by_texture(house, tmp_path):
+    """HM3D-Semantics v0.2 meshes carry the object colours in a texture: the boxes come out the same."""
+    folder = write_hm3d(house, tmp_path / "hm3d" / "val", "00801-HaxA7YrQdEC", textured=True)
+    mesh = trimesh.load(str(folder / "HaxA7YrQdEC.semantic.glb"), force="scene", process=False)
+    assert {g.visual.kind for g in mesh.geometry.values()} == {"texture"}  # really textured, no vertex colours
+    (done,) = import_scenes("hm3d", tmp_path / "hm3d")
+    assert imported_objects(sidecar_path(done.scene_path)) == expected_objects(house, "hm3d")
