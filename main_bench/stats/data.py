@@ -14,7 +14,8 @@ def agent_frame(dataset: str | Path) -> pd.DataFrame:
     """Read a data set (via its manifest) into one row per (episode, agent).
 
     Columns: episode_id, split, task, agents, scene_id, agent_index, geodesic, euclidean, start_x/y/z,
-    target_x/y/z. An empty data set raises DatasetError naming it.
+    target_x/y/z, target_category, target_instance (-1: point goal), start_floor, target_floor. An empty data
+    set raises DatasetError naming it.
     """
     from ..episodes.dataset import load_table
 
@@ -38,6 +39,9 @@ def agent_frame(dataset: str | Path) -> pd.DataFrame:
         "euclidean": np.concatenate([np.asarray(v, dtype=np.float64) for v in cols["euclidean_distances"]]),
         "start_x": starts[:, 0], "start_y": starts[:, 1], "start_z": starts[:, 2],
         "target_x": targets[:, 0], "target_y": targets[:, 1], "target_z": targets[:, 2],
+        "target_category": np.concatenate([np.asarray(v, dtype=object).reshape(-1) for v in cols["target_categories"]]),
+        "target_instance": np.concatenate([np.asarray(v, dtype=np.int64).reshape(-1)
+                                           for v in cols["target_instance_ids"]]),
         "start_floor": np.concatenate([np.asarray(v, dtype=np.int64).reshape(-1) for v in cols["start_floors"]]),
         "target_floor": np.concatenate([np.asarray(v, dtype=np.int64).reshape(-1) for v in cols["target_floors"]]),
     })

@@ -12,6 +12,7 @@ from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
 from .data import agent_frame, episode_travel
 from .figures import StatsFigure, distance_histograms, ratio_distribution, scene_lengths, travel_vs_agents
 from .maps import density_figure, scene_map
+from .rooms import targets_by_room
 
 #: Version of stats.json.
 STATS_SCHEMA_VERSION = 1
@@ -66,8 +67,9 @@ def compute_stats(dataset: str | Path, out_dir: str | Path, settings: StatsSetti
     """Draw every dataset figure of `dataset` into `out_dir` (PNG + CSV each, plus stats.json), atomically.
 
     Figures: geodesic distance histograms by task and agent count; average episode length per scene (MAIN
-    Fig. 3a); distance to travel against the number of agents (Fig. 3b); geodesic/Euclidean ratio; start and
-    target density per scene over its navigable cells when the scene's navmesh can be built.
+    Fig. 3a); distance to travel against the number of agents (Fig. 3b); geodesic/Euclidean ratio; object-goal
+    targets by room type where the scenes' sidecars know rooms; start and target density per scene (one row of
+    panels per floor) over its navigable cells when the scene's navmesh can be built.
     """
     settings = settings or StatsSettings()
     dataset = Path(dataset)
@@ -80,6 +82,9 @@ def compute_stats(dataset: str | Path, out_dir: str | Path, settings: StatsSetti
         travel_vs_agents(frame, settings.seed),
         ratio_distribution(frame),
     ]
+    by_room = targets_by_room(frame, dataset, settings.cache_dir)
+    if by_room is not None:
+        figures.append(by_room)
     maps: dict[str, str] = {}
     for scene_id in sorted(frame["scene_id"].unique()):
         smap = scene_map(dataset, scene_id, settings.cache_dir, settings.maps)

@@ -12,13 +12,16 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
-from dataset_files import mpcat40_of, write_hm3d, write_mp3d, write_replicacad
+from dataset_files import ROOM_CODES, mpcat40_of, write_hm3d, write_mp3d, write_replicacad
 from mb_testing import REPO
 
 from main_bench.episodes.dataset import load_episodes, read_manifest
 from main_bench.scenes.importers.categories import MPCAT40
+from main_bench.scenes.importers.mp3d import REGION_TYPES
 from main_bench.scenes.procedural import generate_house
+from main_bench.stats.report import StatsSettings, compute_stats
 
 WALKER = REPO / "tests" / "evaluation" / "policies" / "short_walk.py"
 SEEDS = (12, 32)  # the two smallest built-in houses (42 m^2 each)
@@ -53,9 +56,22 @@ def _layout(fmt: str, root: Path) -> tuple[Path, list[str], Path, str, dict[str,
     return src, ["--out", str(root / "composed")], split, "val", expected
 
 
+def _room_types(fmt: str) -> dict[str, list[str]]:
+    """Per MP3D scan, the room type of each object (its region's label code, as the .house file says)."""
+    if fmt != "mp3d":
+        return {}
+    out = {}
+    for scan, seed in zip(("17DRP5sb8fy", "1LXtFkjw3qL"), SEEDS, strict=True):
+        house = generate_house(seed)
+        types = {r.name: REGION_TYPES[ROOM_CODES.get(r.type, "z")] for r in house.rooms}
+        out[scan] = [types[f.room] for f in house.furniture]
+    return out
+
+
 @pytest.mark.parametrize("fmt", ["mp3d", "hm3d", "replicacad"])
 def test_dataset_folder_to_leaderboard(fmt, cli, tmp_path):
     src, extra, split_file, split, expected = _layout(fmt, tmp_path)
+    room_of = _room_types(fmt)
     res = cli("scenes", "import", src, "--format", fmt, *extra, "--json")
     assert res.code == 0, res.err
     imported = {s["scene_id"]: s for s in json.loads(res.out)["scenes"]}
@@ -79,6 +95,20 @@ def test_dataset_folder_to_leaderboard(fmt, cli, tmp_path):
             assert cat == want_cat  # the category the file gives the object, through the table
             gap = np.maximum(np.maximum(np.asarray(lo[:2]) - goal[:2], goal[:2] - np.asarray(hi[:2])), 0.0)
             assert np.hypot(*gap) <= manifest.goal_radius + 0.1  # the goal is beside the file's object
+
+    # Statistics say where the targets are: "in the bedroom" (Matterport3D regions; HM3D/ReplicaCAD have no types).
+    stats = compute_stats(data, tmp_path / "stats", StatsSettings(maps=False, cache_dir=tmp_path / "cache"))
+    names = [f["name"] for f in stats.summary["figures"]]
+    if fmt == "mp3d":
+        rooms = pd.read_csv(tmp_path / "stats" / "targets_by_room_type.csv")
+        want: dict[str, int] = {}
+        for ep in episodes:
+            for inst in set(ep.target_instance_ids):
+                kind = room_of[ep.scene_id][inst]
+                want[kind] = want.get(kind, 0) + 1
+        assert dict(zip(rooms["room_type"], rooms["targets"], strict=True)) == want
+    else:
+        assert "targets_by_room_type" not in names
 
     results = tmp_path / "results"
     res = cli("evaluate", "--episodes", data, "--split", split, "--agent", WALKER, "--out", results, "--limit", 2,
