@@ -38,8 +38,7 @@ class GenerationReport:
     episodes_per_scene: dict[str, int]
     seconds: float
     manifest_hash: str
-    point_goal_episodes: int = 0
-    point_goal_scenes: dict[str, dict[str, Any]] | None = None
+    point_goal_fallback: dict[str, Any] | None = None  # {"episodes": n, "scenes": {scene_id: {episodes, reason}}}
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict."""
@@ -53,9 +52,10 @@ class GenerationReport:
         lines = [f"{self.produced} of {self.requested} episodes in {self.shards} shards "
                  f"({self.shards_written} written, {self.shards_reused} reused) -> {self.out} "
                  f"[{self.seconds:.1f} s]"]
-        if self.point_goal_episodes:
-            scenes = self.point_goal_scenes or {}
-            lines.append(f"{self.point_goal_episodes} of {self.produced} episodes fell back to point goals, on "
+        fallback = self.point_goal_fallback or {}
+        if fallback.get("episodes"):
+            scenes = fallback["scenes"]
+            lines.append(f"{fallback['episodes']} of {self.produced} episodes fell back to point goals, on "
                          f"{len(scenes)} scene(s):")
             lines += [f"  {sid}: {v['episodes']} episodes: {v['reason']}" for sid, v in scenes.items()]
         for s in self.shortfalls:
@@ -219,4 +219,4 @@ def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], o
         shards_written=sum(e["written"] for e in entries), shards_reused=sum(not e["written"] for e in entries),
         shortfalls=tuple(doc["shortfalls"]), episodes_per_scene=doc["episodes_per_scene"],
         seconds=time.perf_counter() - started, manifest_hash=sha256_file(out / MANIFEST_NAME),
-        point_goal_episodes=doc["point_goal_episodes"], point_goal_scenes=doc["point_goal_scenes"])
+        point_goal_fallback=doc["point_goal_fallback"])

@@ -178,7 +178,8 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
         path = out / shard["path"]
         write_shard(table, path, report)
         entries.append({**shard, "rows": table.num_rows, "sha256": sha256_file(path),
-                        "reason": report.get("reason", ""), "rejections": report.get("rejections", {})})
+                        "reason": report.get("reason", ""), "rejections": report.get("rejections", {}),
+                        "point_goals": report.get("point_goals", "")})
     atomic_write_json(out / MANIFEST_NAME, build_manifest(ident, entries))
     (out / LOCK_NAME).unlink(missing_ok=True)
     return out

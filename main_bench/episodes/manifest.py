@@ -132,8 +132,8 @@ def build_manifest(ident: dict, shards: list[dict]) -> dict:
         "episodes_per_scene": dict(sorted(per_scene.items())),
         "shards": [{k: s[k] for k in ShardEntry.__dataclass_fields__} for s in shards],
         "shortfalls": shortfalls,
-        "point_goal_episodes": sum(v["episodes"] for v in point_goals.values()),
-        "point_goal_scenes": dict(sorted(point_goals.items())),
+        "point_goal_fallback": {"episodes": sum(v["episodes"] for v in point_goals.values()),
+                                "scenes": dict(sorted(point_goals.items()))},
     }
 
 

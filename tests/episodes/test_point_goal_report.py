@@ -13,12 +13,13 @@ def test_point_goal_fallback_is_reported(gen, cli, ep_scenes, ep_cache, tmp_path
     assert res.code == 0, res.err
     report = json.loads(res.out)
     # `box` has no objects (no sidecar, no named node): all its episodes are point goals; `furn` has objects.
-    assert report["point_goal_episodes"] == report["episodes_per_scene"]["box"] == 4
-    assert list(report["point_goal_scenes"]) == ["box"]
-    reason = report["point_goal_scenes"]["box"]["reason"]
+    fallback = report["point_goal_fallback"]
+    assert fallback["episodes"] == report["episodes_per_scene"]["box"] == 4
+    assert list(fallback["scenes"]) == ["box"]
+    reason = fallback["scenes"]["box"]["reason"]
     assert "no objects sidecar" in reason and "scenes import" in reason
     doc = json.loads((out / "manifest.json").read_text())
-    assert doc["point_goal_episodes"] == 4 and doc["point_goal_scenes"] == report["point_goal_scenes"]
+    assert doc["point_goal_fallback"] == fallback
     assert read_manifest(out).episodes == 8  # the manifest still reads
     text = cli("episodes", "generate", "--scenes", ep_scenes / "scenes", "--splits", ep_scenes / "splits.json",
                "--out", out, "--cache-dir", ep_cache, "--per-scene", 4, "--agents", "2", "--task", "shared",
@@ -37,4 +38,5 @@ def test_an_empty_sidecar_is_named_as_the_reason(gen, ep_scenes, tmp_path):
     (scenes / "furn.objects.json").write_bytes((ep_scenes / "scenes" / "furn.objects.json").read_bytes())
     res = gen(tmp_path / "data", "--agents", "2", "--task", "shared", per_scene=2, scenes=scenes)
     assert res.code == 0, res.err
-    assert json.loads(res.out)["point_goal_scenes"]["box"]["reason"] == "its objects sidecar box.objects.json lists no objects"
+    reason = json.loads(res.out)["point_goal_fallback"]["scenes"]["box"]["reason"]
+    assert reason == "its objects sidecar box.objects.json lists no objects"

@@ -84,7 +84,7 @@ def test_dataset_folder_to_leaderboard(fmt, cli, tmp_path):
               "--cache-dir", tmp_path / "cache", "--json")
     assert res.code == 0, res.err
     report = json.loads(res.out)
-    assert report["produced"] == 6 and report["point_goal_episodes"] == 0 and report["point_goal_scenes"] == {}
+    assert report["produced"] == 6 and report["point_goal_fallback"] == {"episodes": 0, "scenes": {}}
     manifest = read_manifest(data)
     assert sorted(manifest.scenes) == sorted(expected) and {e.split for e in manifest.scenes.values()} == {split}
     episodes = load_episodes(data, split)
