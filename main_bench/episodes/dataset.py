@@ -8,9 +8,13 @@ import pyarrow as pa
 import pyarrow.dataset as pads
 
 from ..errors import DatasetError
+from ..io import sha256_file
+from ..parquet_read import read_parquet
 from ..scenes.loader import scene_content_hash
 from .manifest import Manifest, SceneEntry, ShardEntry, read_manifest
 from .schema import PARTITION_SCHEMA, ROW_SCHEMA, Episode
+
+_FIX = "restore it or regenerate the data set"
 
 __all__ = ["Manifest", "SceneEntry", "ShardEntry", "load_episodes", "load_table", "read_manifest",
            "resolve_scene"]
@@ -26,16 +30,29 @@ def load_table(dataset: str | Path, split: str | None = None, task: str | None =
              and (agents is None or s.agents == agents)]
     missing = [f for f in files if not f.is_file()]
     if missing:
-        raise DatasetError(f"shard listed in the manifest is missing: {missing[0]}; regenerate the data set",
-                           path=root)
+        raise DatasetError("shard listed in the manifest is missing; restore it or regenerate the data set",
+                           path=missing[0])
     schema = pa.unify_schemas([ROW_SCHEMA, PARTITION_SCHEMA])
     if not files:
         return schema.empty_table()
+    check_checksums(manifest, [s for s in manifest.shards if root / s.path in set(files)])
     part = pads.partitioning(PARTITION_SCHEMA, flavor="hive")
-    ds = pads.dataset([str(f) for f in files], schema=schema, format="parquet", partitioning=part,
-                      partition_base_dir=str(root))
-    table = ds.to_table()
+    table = read_parquet(files, error=DatasetError, fix=_FIX, schema=schema, partitioning=part, base_dir=root)
     return table.sort_by("episode_id")
+
+
+def check_checksums(manifest: Manifest, shards: list[ShardEntry]) -> None:
+    """Refuse a shard whose bytes differ from the checksum in the manifest (damaged or edited), naming it."""
+    for s in shards:
+        path = manifest.root / s.path
+        try:
+            found = sha256_file(path)
+        except OSError as exc:
+            raise DatasetError(f"cannot read shard ({exc.strerror or type(exc).__name__}); {_FIX}",
+                               path=path) from None
+        if found != s.sha256:
+            raise DatasetError(f"shard differs from its checksum in manifest.json (damaged or edited); {_FIX}",
+                               path=path)
 
 
 def load_episodes(dataset: str | Path, split: str | None = None, task: str | None = None,

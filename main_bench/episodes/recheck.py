@@ -7,8 +7,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pyarrow as pa
-import pyarrow.parquet as pq
 
+from ..errors import DatasetError
+from ..parquet_read import read_parquet
 from .goals import target_field
 from .plan import stable_id
 
@@ -46,9 +47,9 @@ def recheck_distances(manifest: Manifest, shards: list[tuple[ShardEntry, int]], 
         local = picked[(picked >= offsets[k]) & (picked < offsets[k + 1])] - offsets[k]
         if len(local) == 0:
             continue
-        part = pq.read_table(manifest.root / entry.path, columns=[
-            "episode_id", "start_positions", "target_instance_ids", "target_positions", "geodesic_distances",
-        ]).take(pa.array(local))
+        part = read_parquet(manifest.root / entry.path, error=DatasetError, fix="regenerate the data set",
+                            columns=["episode_id", "start_positions", "target_instance_ids", "target_positions",
+                                     "geodesic_distances"]).take(pa.array(local))
         rows += [(entry.scene_id, entry.path, r) for r in part.to_pylist()]
     by_scene: dict[str, list[int]] = {}
     for i, row in enumerate(rows):

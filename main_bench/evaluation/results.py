@@ -19,6 +19,7 @@ import pyarrow.parquet as pq
 
 from ..errors import ResultsError
 from ..io import atomic_path, check_schema_version, read_json
+from ..parquet_read import read_parquet
 from .ledger import verify_results
 from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
 
@@ -49,11 +50,11 @@ def _read(root: Path, kind: str, filter_expr=None, files: list[Path] | None = No
         files = [p for p in files if Path(base) in Path(p).parents]
     if not base.is_dir() or files == []:
         return pd.DataFrame({f.name: pd.Series(dtype=object) for f in list(schema) + list(PARTITION_SCHEMA)})
-    source: Any = base if files is None else [str(p) for p in files]
-    ds = pads.dataset(source, format="parquet", partitioning=pads.partitioning(PARTITION_SCHEMA, flavor="hive"),
-                      schema=pa.unify_schemas([schema, PARTITION_SCHEMA]), exclude_invalid_files=False,
-                      partition_base_dir=None if files is None else str(base))
-    return ds.to_table(filter=filter_expr).to_pandas()
+    source: Any = base if files is None else [Path(p) for p in files]
+    return read_parquet(source, error=ResultsError, fix="delete it and run the same evaluate again to redo its chunk",
+                        schema=pa.unify_schemas([schema, PARTITION_SCHEMA]), filter=filter_expr,
+                        partitioning=pads.partitioning(PARTITION_SCHEMA, flavor="hive"),
+                        base_dir=None if files is None else base).to_pandas()
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,8 +97,5 @@ def load_results(path: str | Path) -> Results:
     summary = read_json(summary_path, what="results summary")
     check_schema_version(summary, RESULTS_SCHEMA_VERSION, summary_path, "results summary")
     files = verify_results(path, summary, summary_path)
-    try:
-        records = _read(path, "records", files=files)
-    except (pa.ArrowInvalid, OSError) as exc:
-        raise ResultsError(f"unreadable records: {exc}", path=path) from None
+    records = _read(path, "records", files=files)
     return Results(path=path, summary=summary, records=records, files=tuple(files))

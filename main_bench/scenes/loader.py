@@ -1,12 +1,13 @@
 """Scene loading: any mesh file trimesh reads, flattened and converted to the canonical frame.
 
 Canonical frame: right-handed, +Z up, metres. glTF files are +Y up by their specification; OBJ and PLY say
-nothing, so `up="auto"` decides from the geometry (the axis along which most surface area faces: floors).
+nothing, so `up="auto"` decides from the geometry: floors under walls that enclose them (see `up_axis.py`).
 """
 
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -22,6 +23,7 @@ from .objects import (
     read_sidecar,
     sidecar_path,
 )
+from .up_axis import decide_up
 
 UpAxis = Literal["y", "z", "auto"]
 SCENE_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
@@ -149,15 +151,22 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
                          path=path)
 
     is_gltf = path.suffix.lower() in (".glb", ".gltf")
+    extents = np.ptp(vertices, axis=0)
+
+    def units(axis: str) -> tuple[float, str]:
+        return _decide_scale(float(extents.max()), float(extents[1 if axis == "y" else 2]), scale, path)
+
+    sizes = [_metres(units, axis) for axis in (("y", "z") if up == "auto" else (up,))]
+    if all(v is None for v in sizes):
+        units("y" if up == "auto" else up)  # absurd in every frame: that error comes first
     declared = _sidecar_up(path) if up == "auto" else None
     if declared is not None:
         up_axis, up_reason = declared, "objects sidecar (written by `scenes import`) says so"
     else:
-        up_axis, up_reason = _decide_up(vertices, faces_all, up, is_gltf)
+        up_axis, up_reason = decide_up(vertices, faces_all, up, is_gltf, path,
+                                       lambda axis: _metres(units, axis) or 1.0)
     transform = Y_UP_TO_Z_UP.copy() if up_axis == "y" else np.eye(4)
-    extents = np.ptp(vertices, axis=0)
-    height = float(extents[1] if up_axis == "y" else extents[2])
-    factor, scale_reason = _decide_scale(float(extents.max()), height, scale, path)
+    factor, scale_reason = units(up_axis)
     transform[:3, :3] *= factor
     for p in parts:
         p.apply_transform(transform)
@@ -212,24 +221,12 @@ def _sidecar_up(path: Path) -> Literal["y", "z"] | None:
     return axis if axis in ("y", "z") else None
 
 
-def _decide_up(vertices: np.ndarray, faces: np.ndarray, up: UpAxis, is_gltf: bool) -> tuple[Literal["y", "z"], str]:
-    if up in ("y", "z"):
-        return up, "given"  # type: ignore[return-value]
-    tri = vertices[faces]
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area = np.linalg.norm(cross, axis=1)
-    ok = area > 0
-    normals = cross[ok] / area[ok, None]
-    # Area of faces lying flat across each axis: floors and ceilings face along the up axis.
-    flat = [(area[ok] * (np.abs(normals[:, k]) > 0.95)).sum() for k in range(3)]
-    y_score, z_score = flat[1], flat[2]
-    if is_gltf:
-        if z_score > 2.0 * y_score and z_score > 0:
-            return "z", "geometry: floors face +Z although glTF specifies +Y"
-        return "y", "glTF specifies +Y up"
-    if y_score > z_score:
-        return "y", "geometry: most flat surface area faces along Y"
-    return "z", "geometry: most flat surface area faces along Z"
+def _metres(units: Callable[[str], tuple[float, str]], axis: str) -> float | None:
+    """Metres per file unit with `axis` up, or None where that frame's size is absurd."""
+    try:
+        return float(units(axis)[0])
+    except SceneError:
+        return None
 
 
 def _decide_scale(extent: float, height: float, scale: float | None, path: Path) -> tuple[float, str]:

@@ -1,0 +1,254 @@
+"""Which axis of a scene file is up: the evidence for each candidate frame, and the decision `--up auto` makes.
+
+In: the file's vertices and faces (file units), the format's own rule (glTF is +Y up) and metres per unit for
+each candidate. Out: "y" or "z" and a sentence saying on what evidence, or a `SceneError` naming the file.
+
+A candidate frame (file +Y or +Z up) is judged as an indoor scene would be:
+
+- its floor is the lowest large horizontal surface (at least `FLOOR_MIN_M2` within one `LEVEL_BAND_M` band)
+  with room to stand on it (`STANDABLE_MIN` of its points clear of any surface by `CLEARANCE_M`);
+- the walls (vertical surfaces) start there: at most `WALLS_BELOW_MAX` of their area lies more than
+  `FLOOR_TOL_M` below the floor;
+- where there are walls (vertical area rising from the floor at least `WALLED_RATIO` times the floor's area),
+  they enclose it: of horizontal rays cast `RAY_HEIGHT_M` above sample points of the floor, at least
+  `ENCLOSED_MIN` hit a surface. Exported scenes often lack a ceiling, never most of their walls: turning a
+  ceiling-less room on its side leaves one side open, a room of walls only two sides.
+
+A frame that fails is never accepted. When both pass, a frame clearly more enclosed than the other wins (unless
+its floor is much the smaller), then one whose floor is `FLOOR_WIN_RATIO` times the other's, then the format's
+rule and the flat-area comparison (the axis most flat surface faces along) must agree with a clear
+margin; otherwise the evidence is ambiguous and `--up` must be given.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from ..errors import SceneError
+
+Axis = Literal["y", "z"]
+#: A face is horizontal when its normal is within ~18 deg of up, vertical within ~12 deg of horizontal.
+HORIZONTAL_COS, VERTICAL_COS = 0.95, 0.2
+#: Height band (m) of one floor level; least floor area (m^2) in one band.
+LEVEL_BAND_M, FLOOR_MIN_M2 = 0.15, 1.0
+#: A floor has room to stand: this share of its sample points is at least `CLEARANCE_M` from any surface at
+#: `RAY_HEIGHT_M` above it (the bottom faces of walls are no floor). At most `MAX_LEVELS` levels are tried.
+STANDABLE_MIN, CLEARANCE_M, MAX_LEVELS = 0.25, 0.2, 8
+#: Walls may start this far (m) below the floor (slab thickness, skirting), and this share of wall area lower.
+FLOOR_TOL_M, WALLS_BELOW_MAX = 0.3, 0.05
+#: A frame has walls when the vertical area within `STOREY_M` above its floor is this many times the floor's.
+WALLED_RATIO, STOREY_M = 0.3, 2.0
+#: Rays are cast this high above the floor (m), in `RAY_DIRECTIONS` directions from `RAY_POINTS` floor points.
+RAY_HEIGHT_M, RAY_DIRECTIONS, RAY_POINTS = 1.0, 16, 48
+#: Least share of rays that must hit a wall in a walled frame; a frame this much more enclosed wins outright
+#: unless its floor is less than `FLOOR_RATIO_MIN` times the other frame's (a small enclosed patch).
+ENCLOSED_MIN, ENCLOSED_MARGIN, FLOOR_RATIO_MIN = 0.6, 0.15, 0.5
+#: A frame whose floor is this many times the other's wins when the walls do not decide.
+FLOOR_WIN_RATIO = 2.0
+#: Flat-area ratio needed for the flat-area comparison to count as clear evidence.
+FLAT_MARGIN = 1.5
+
+
+@dataclass(frozen=True)
+class FrameEvidence:
+    """What the geometry says about one candidate up axis (metres, in that frame)."""
+
+    axis: Axis
+    flat_area: float
+    floor_z: float | None
+    floor_area: float
+    walls_below: float
+    walled: bool
+    enclosure: float | None
+    problem: str
+
+    @property
+    def ok(self) -> bool:
+        """Whether the frame is a plausible indoor scene."""
+        return not self.problem
+
+    def describe(self) -> str:
+        """One clause: floor, walls and enclosure of this frame."""
+        if self.floor_z is None:
+            return f"+{self.axis.upper()}: {self.problem}"
+        text = f"+{self.axis.upper()}: floor {self.floor_area:.1f} m^2 at {self.floor_z:.2f} m"
+        if self.enclosure is not None:
+            text += f", walls enclose {100 * self.enclosure:.0f}% of it"
+        elif not self.walled:
+            text += ", no walls around it"
+        return text + (f" ({self.problem})" if self.problem else "")
+
+
+def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, is_gltf: bool, path: Path,
+              metres: Callable[[Axis], float]) -> tuple[Axis, str]:
+    """The file's up axis and why. `up` y or z is checked for a floor; auto weighs the evidence (module doc).
+
+    `metres(axis)`: metres per file unit when `axis` is up. Raises `SceneError` naming the file for a scene
+    with no floor in the given frame, with no plausible frame, or (auto) with ambiguous evidence.
+    """
+    tri = vertices[faces]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area2 = np.linalg.norm(cross, axis=1)
+    keep = area2 > 0
+    tri, normals, area = tri[keep], cross[keep] / area2[keep, None], area2[keep] / 2
+    if up in ("y", "z"):
+        ev = frame_evidence(tri, normals, area, up, metres(up))  # type: ignore[arg-type]
+        if ev.floor_z is None:
+            raise SceneError(f"no floor with --up {up}: {ev.problem}; check the file or its --up", path=path)
+        return up, "given"  # type: ignore[return-value]
+    y = frame_evidence(tri, normals, area, "y", metres("y"))
+    z = frame_evidence(tri, normals, area, "z", metres("z"))
+    both = f"{y.describe()}; {z.describe()}"
+    if not y.ok and not z.ok:
+        raise SceneError(f"no floor in either frame ({both}); a scene needs a floor under its walls, "
+                         "or give --up y|z if the file is right", path=path)
+    if y.ok != z.ok:
+        pick = y if y.ok else z
+        return pick.axis, f"geometry: {pick.describe()}; the other frame fails ({(z if y.ok else y).describe()})"
+    if y.enclosure is not None and z.enclosure is not None and abs(y.enclosure - z.enclosure) >= ENCLOSED_MARGIN:
+        pick, other = (y, z) if y.enclosure > z.enclosure else (z, y)
+        if pick.floor_area >= FLOOR_RATIO_MIN * other.floor_area:
+            return pick.axis, f"geometry: walls enclose the floor best with +{pick.axis.upper()} up ({both})"
+    big, small = (y, z) if y.floor_area >= z.floor_area else (z, y)
+    if small.floor_area * FLOOR_WIN_RATIO <= big.floor_area:
+        return big.axis, f"geometry: the floor is largest with +{big.axis.upper()} up ({both})"
+    by_area: Axis | None = ("y" if y.flat_area > FLAT_MARGIN * z.flat_area else
+                            "z" if z.flat_area > FLAT_MARGIN * y.flat_area else None)
+    if is_gltf and by_area != "z":
+        return "y", "glTF specifies +Y up and the geometry agrees" + ("" if by_area else " or is even")
+    if is_gltf:
+        return "z", f"geometry: floors face +Z although glTF specifies +Y ({both})"
+    if by_area is not None:
+        return by_area, f"geometry: most flat surface area faces along {by_area.upper()} ({both})"
+    raise SceneError(f"cannot tell the up axis ({both}; flat area {y.flat_area:.1f} along Y, {z.flat_area:.1f} "
+                     "along Z); give --up y or --up z", path=path)
+
+
+def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis: Axis,
+                   metres: float) -> FrameEvidence:
+    """Floor, walls and enclosure of the frame where file axis `axis` is up (faces in file units)."""
+    k = 1 if axis == "y" else 2
+    h = [i for i in range(3) if i != k]
+    tri = tri * metres
+    area = area * metres**2
+    ups = np.abs(normals[:, k])
+    horizontal, vertical = ups > HORIZONTAL_COS, ups < VERTICAL_COS
+    flat = float(area[horizontal].sum())
+    heights = tri[:, :, k]
+    tri2 = tri[:, :, h]
+    centre = heights.mean(axis=1)
+    floor = None
+    for floor_z, floor_area in _levels(centre[horizontal], area[horizontal]):
+        in_floor = horizontal & (centre >= floor_z) & (centre <= floor_z + LEVEL_BAND_M)
+        segs = _slice(tri2, heights, floor_z + RAY_HEIGHT_M)
+        points = _sample(tri2[in_floor], area[in_floor])
+        points = points[_clearance(points, segs) >= CLEARANCE_M]
+        if len(points) >= STANDABLE_MIN * RAY_POINTS:
+            floor = (floor_z, floor_area, segs, points)
+            break
+    if floor is None:
+        return FrameEvidence(axis, flat, None, 0.0, 0.0, False, None,
+                             f"no horizontal surface of {FLOOR_MIN_M2:g} m^2 or more with room to stand")
+    floor_z, floor_area, segs, points = floor
+    wall_lo = heights[vertical].min(axis=1)
+    wall_area = area[vertical]
+    total_walls = float(wall_area.sum())
+    below = float(wall_area[wall_lo < floor_z - FLOOR_TOL_M].sum()) / total_walls if total_walls else 0.0
+    rising = float(wall_area[(wall_lo >= floor_z - FLOOR_TOL_M) & (wall_lo <= floor_z + STOREY_M)].sum())
+    walled = rising >= WALLED_RATIO * floor_area
+    if below > WALLS_BELOW_MAX:
+        return FrameEvidence(axis, flat, floor_z, floor_area, below, walled, None,
+                             f"{100 * below:.0f}% of the walls reach below the floor")
+    if not walled:
+        return FrameEvidence(axis, flat, floor_z, floor_area, below, False, None, "")
+    enclosure = _enclosure(points, segs)
+    problem = "" if enclosure >= ENCLOSED_MIN else "open on the sides: walls on a floor that was a wall?"
+    return FrameEvidence(axis, flat, floor_z, floor_area, below, True, enclosure, problem)
+
+
+def _levels(heights: np.ndarray, area: np.ndarray) -> list[tuple[float, float]]:
+    """(height, area) of the lowest `MAX_LEVELS` bands of horizontal faces holding at least FLOOR_MIN_M2."""
+    if len(heights) == 0:
+        return []
+    order = np.argsort(heights, kind="stable")
+    hs, ar = heights[order], area[order]
+    # Area within one band above each face's height; bands holding enough start a level, one per band.
+    ends = np.searchsorted(hs, hs + LEVEL_BAND_M, side="right")
+    csum = np.concatenate([[0.0], np.cumsum(ar)])
+    band = csum[ends] - csum[np.arange(len(hs))]
+    out: list[tuple[float, float]] = []
+    for i in np.flatnonzero(band >= FLOOR_MIN_M2):
+        if not out or hs[i] > out[-1][0] + LEVEL_BAND_M:
+            out.append((float(hs[i]), float(band[i])))
+            if len(out) == MAX_LEVELS:
+                break
+    return out
+
+
+def _sample(tri2: np.ndarray, area: np.ndarray) -> np.ndarray:
+    """`RAY_POINTS` points (2D) on the triangles, area-weighted, from a fixed seed (deterministic)."""
+    rng = np.random.default_rng(0)
+    pick = rng.choice(len(tri2), size=RAY_POINTS, p=area / area.sum())
+    u, v = rng.random(RAY_POINTS), rng.random(RAY_POINTS)
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    t = tri2[pick]
+    return t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
+
+
+def _clearance(points: np.ndarray, segs: np.ndarray) -> np.ndarray:
+    """Distance (m) from each 2D point to the nearest segment (inf without segments)."""
+    if len(segs) == 0:
+        return np.full(len(points), np.inf)
+    a, e = segs[:, 0], segs[:, 1] - segs[:, 0]
+    ee = np.maximum((e * e).sum(axis=1), 1e-18)
+    out = np.empty(len(points))
+    for i, p in enumerate(points):
+        r = np.clip(((p - a) * e).sum(axis=1) / ee, 0.0, 1.0)
+        out[i] = float(np.sqrt((((a + r[:, None] * e) - p) ** 2).sum(axis=1).min()))
+    return out
+
+
+def _enclosure(points: np.ndarray, segs: np.ndarray) -> float:
+    """Share of horizontal rays from the 2D `points` (in `RAY_DIRECTIONS` directions) that hit a segment."""
+    if len(segs) == 0 or len(points) == 0:
+        return 0.0
+    angles = 2 * np.pi * (np.arange(RAY_DIRECTIONS) + 0.5) / RAY_DIRECTIONS
+    dirs = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    a, e = segs[:, 0], segs[:, 1] - segs[:, 0]
+    hits = 0
+    for p in points:
+        # Ray p + s*d against segment a + r*e: solve with 2D cross products, all directions and segments at once.
+        w = a - p
+        den = dirs[:, None, 0] * e[None, :, 1] - dirs[:, None, 1] * e[None, :, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (w[None, :, 0] * e[None, :, 1] - w[None, :, 1] * e[None, :, 0]) / den
+            r = (w[None, :, 0] * dirs[:, None, 1] - w[None, :, 1] * dirs[:, None, 0]) / den
+        hit = (np.abs(den) > 1e-12) & (s > 1e-3) & (r >= 0) & (r <= 1)
+        hits += int(hit.any(axis=1).sum())
+    return hits / (len(points) * RAY_DIRECTIONS)
+
+
+def _slice(tri2: np.ndarray, heights: np.ndarray, z: float) -> np.ndarray:
+    """(S, 2, 2) segments where the plane at height `z` cuts the triangles."""
+    lo, hi = heights.min(axis=1), heights.max(axis=1)
+    m = (lo < z) & (hi > z)
+    t, hz = tri2[m], heights[m]
+    pts = []
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        zi, zj = hz[:, i], hz[:, j]
+        cut = (zi - z) * (zj - z) < 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.where(cut, (z - zi) / (zj - zi), np.nan)
+        pts.append(t[:, i] + f[:, None] * (t[:, j] - t[:, i]))
+    stacked = np.stack(pts, axis=1)  # (S, 3, 2): two finite points per cut triangle (one edge is not cut)
+    ok = np.isfinite(stacked[:, :, 0])
+    two = ok.sum(axis=1) == 2
+    stacked, ok = stacked[two], ok[two]
+    order = np.argsort(~ok, axis=1, kind="stable")[:, :2]
+    return np.take_along_axis(stacked, order[:, :, None], axis=1)
