@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import gzip
 import json
+import zlib
 from collections import defaultdict
 from pathlib import Path
 
@@ -142,7 +143,7 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
     for f in sorted(src.glob("*_n*/*/*.json.gz")):
         try:
             episodes = json.loads(gzip.decompress(f.read_bytes()))["episodes"]
-        except (OSError, ValueError, KeyError, TypeError) as exc:
+        except (OSError, EOFError, zlib.error, ValueError, KeyError, TypeError) as exc:
             raise DatasetError(f"not a Habitat PointNav-v1 file ({exc})", path=f) from None
         for ep in episodes:
             mb = ep.get("info", {}).get("main_bench") if isinstance(ep, dict) else None

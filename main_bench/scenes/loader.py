@@ -142,7 +142,11 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
         raise SceneError(f"has {bad} vertices with NaN or infinite coordinates; repair the mesh", path=path)
     faces, offset = [], 0
     for p in parts:
-        faces.append(np.asarray(p.faces, dtype=np.int64) + offset)
+        own = np.asarray(p.faces, dtype=np.int64)
+        if own.min() < 0 or own.max() >= len(p.vertices):
+            raise SceneError(f"has faces that point at vertices that do not exist (index {own.min()} or "
+                             f"{own.max()} of {len(p.vertices)}): a damaged file? export it again", path=path)
+        faces.append(own + offset)
         offset += len(p.vertices)
     faces_all = np.concatenate(faces)
     tri = vertices[faces_all]
