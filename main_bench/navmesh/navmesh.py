@@ -104,8 +104,14 @@ class NavMesh:
     # ----------------------------------------------------------------- building and files
     @classmethod
     def build(cls, scene: Any, settings: NavMeshSettings = NavMeshSettings()) -> NavMesh:
-        """Build the navmesh of a `Scene` (canonical frame). Raises NavMeshError naming the settings to change."""
-        grid = build_grid(scene.vertices, scene.faces, settings)
+        """Build the navmesh of a `Scene` (canonical frame). Raises NavMeshError naming the scene's file and the
+        settings to change."""
+        try:
+            grid = build_grid(scene.vertices, scene.faces, settings)
+        except NavMeshError as exc:
+            if exc.path is not None or getattr(scene, "path", None) is None:
+                raise
+            raise NavMeshError(exc.problem, path=scene.path) from None
         return cls(grid, settings, str(scene.scene_id), str(scene.content_hash),
                    geometry_hash(scene.vertices, scene.faces))
 

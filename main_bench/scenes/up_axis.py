@@ -98,8 +98,8 @@ def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, is_gltf: bool, p
     tri, normals, area = tri[keep], cross[keep] / area2[keep, None], area2[keep] / 2
     if up in ("y", "z"):
         ev = frame_evidence(tri, normals, area, up, metres(up))  # type: ignore[arg-type]
-        if ev.floor_z is None:
-            raise SceneError(f"no floor with --up {up}: {ev.problem}; check the file or its --up", path=path)
+        if ev.floor_z is None or ev.walls_below > WALLS_BELOW_MAX:
+            raise SceneError(f"no floor with --up {up}: {ev.describe()}; check the file or its --up", path=path)
         return up, "given"  # type: ignore[return-value]
     y = frame_evidence(tri, normals, area, "y", metres("y"))
     z = frame_evidence(tri, normals, area, "z", metres("z"))

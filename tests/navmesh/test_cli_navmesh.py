@@ -60,7 +60,11 @@ def test_build_bad_inputs(cli, tmp_path):
     steep = tmp_path / "steep.obj"
     trimesh.Trimesh(v[:, [0, 2, 1]], f, process=False).export(steep)  # the slab stood on its edge
     out = tmp_path / "steep.navmesh"
-    _bad(cli("navmesh", "build", steep, "--up", "z", "--out", out, "--agent-radius", "2.5"), "--agent-radius")
+    # The upright slab has no floor at all (the loader says so); a flat 4 x 4 m slab is too narrow for r = 2.5 m.
+    _bad(cli("navmesh", "build", steep, "--up", "z", "--out", out), "no floor")
+    flat = tmp_path / "flat.obj"
+    trimesh.Trimesh(v, f, process=False).export(flat)
+    _bad(cli("navmesh", "build", flat, "--up", "z", "--out", out, "--agent-radius", "2.5"), "--agent-radius")
     assert not out.exists()
     _bad(cli("navmesh", "build", steep, "--up", "z", "--out", out, "--max-slope", "100"), "max_slope")
 
