@@ -38,6 +38,9 @@ class ValidationReport:
     rechecked: int = 0
     max_recheck_error: float = 0.0
     problems: list[dict[str, Any]] = field(default_factory=list)
+    #: SHA-256 of manifest.json and the task rules it sets (compare both with the published ones).
+    manifest_hash: str = ""
+    task_rules: dict[str, Any] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -50,6 +53,7 @@ class ValidationReport:
         """JSON-ready dict with problem counts by check."""
         return {"dataset": str(self.dataset), "ok": self.ok, "shards": self.shards, "episodes": self.episodes,
                 "rechecked": self.rechecked, "max_recheck_error": self.max_recheck_error,
+                "manifest_hash": self.manifest_hash, "task_rules": self.task_rules,
                 "problem_counts": dict(Counter(p["check"] for p in self.problems)), "problems": self.problems}
 
     def render(self, limit: int = 50) -> str:
@@ -58,6 +62,10 @@ class ValidationReport:
                 + (f", {self.rechecked} distances rechecked (max error {self.max_recheck_error:.4f} m)"
                    if self.rechecked else ""))
         lines = [head]
+        if self.manifest_hash:
+            from ..evaluation.task_rules import describe_rules
+
+            lines += [f"  manifest sha256 {self.manifest_hash}", f"  task rules: {describe_rules(self.task_rules)}"]
         for p in self.problems[:limit]:
             where = " ".join(x for x in (p["shard"], p["episode_id"]) if x)
             lines.append(f"  [{p['check']}] {where}: {p['detail']}")
@@ -186,8 +194,10 @@ def validate_dataset(dataset: str | Path, *, recheck: bool = False, sample: int 
     root = Path(dataset)
     if not root.exists():
         raise InputError("episode data set not found", path=root)
+    from ..evaluation.task_rules import rules_json
+
     manifest = read_manifest(root)
-    report = ValidationReport(dataset=root)
+    report = ValidationReport(dataset=root, manifest_hash=manifest.manifest_hash, task_rules=rules_json(manifest))
     # One shard in memory at a time; ids are kept per (scene, task, N) only: an id of another group fails the
     # id-prefix check of `check_rows`, so duplicates can only hide inside a group.
     ordered = sorted(manifest.shards, key=lambda e: (e.scene_id, e.task, e.agents, e.shard, e.path))

@@ -8,9 +8,11 @@ DESIGN.md's: 500 steps, 0.25 m, 30 deg, 128 x 128, hfov 90 deg at 1.25 m, depth 
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
-from ..sim.task import TaskRules
+if TYPE_CHECKING:  # the simulator's modules are heavy; `describe_rules` is imported by the leaderboard
+    from ..sim.task import TaskRules
 
 
 def max_steps_of(manifest: Any) -> int:
@@ -20,6 +22,8 @@ def max_steps_of(manifest: Any) -> int:
 
 def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
     """`TaskRules` for `task` with the data set's success distance (metres) and max steps."""
+    from ..sim.task import TaskRules
+
     return TaskRules(task=task, success_distance=float(manifest.success_distance), max_steps=max_steps_of(manifest))
 
 
@@ -45,3 +49,21 @@ def rules_json(manifest: Any) -> dict[str, Any]:
             "agent_height": sim.agent_height, "max_climb": sim.max_climb, "forward_step": sim.forward_step,
             "turn_angle_deg": sim.turn_angle_deg, "camera": {"width": sim.camera.width, "height": sim.camera.height,
             "hfov_deg": sim.camera.hfov_deg, "height_m": sim.camera.height_m, "max_depth": sim.camera.max_depth}}
+
+
+def describe_rules(rules: Mapping[str, Any]) -> str:
+    """One line of the task rules (as `rules_json` gives them) for people to compare with the published ones;
+    '' when none were recorded."""
+    if not rules:
+        return ""
+    cam = rules.get("camera") or {}
+
+    def num(key: str, src: Mapping[str, Any] = rules) -> str:
+        value = src.get(key)
+        return "?" if value is None else f"{value:g}" if isinstance(value, float) else str(value)
+
+    return (f"success within {num('success_distance')} m; at most {num('max_steps')} steps per agent; actions "
+            f"found, move_forward {num('forward_step')} m, turn_left/turn_right {num('turn_angle_deg')} deg; "
+            f"camera {num('width', cam)}x{num('height', cam)} px, hfov {num('hfov_deg', cam)} deg at "
+            f"{num('height_m', cam)} m, depth to {num('max_depth', cam)} m; agent radius {num('agent_radius')} m, "
+            f"height {num('agent_height')} m, climb {num('max_climb')} m")

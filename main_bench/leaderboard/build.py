@@ -40,7 +40,7 @@ def build_sections(subs: list[LoadedSubmission], settings: LeaderboardSettings) 
             sections.append(Section(
                 index=len(sections), manifest_hash=first.manifest_hash, dataset_path=first.dataset_path,
                 sensor_track=sensor_track, submissions=tuple(m.submission for m in members),
-                tracks=tuple(tracks), table2=tuple(t2), figures=tuple(figures)))
+                tracks=tuple(tracks), table2=tuple(t2), figures=tuple(figures), task_rules=dict(first.task_rules)))
     return sections
 
 

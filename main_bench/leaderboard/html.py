@@ -10,6 +10,7 @@ import base64
 from html import escape
 
 from .. import __version__
+from ..evaluation.task_rules import describe_rules
 from .format import fmt_estimate, metric_title, track_title
 from .report import Section
 from .submissions import Submission
@@ -112,6 +113,7 @@ def _section_html(section: Section) -> str:
     parts = [f'<h2 id="section-{section.index}">{escape(section.title)}</h2>',
              f'<p class="meta">Episodes: <code>{escape(section.dataset_path or "(path not recorded)")}</code>, '
              f"manifest hash <code>{escape(section.manifest_hash)}</code></p>",
+             f'<p class="meta">Task rules: {escape(describe_rules(section.task_rules) or "(not recorded)")}</p>',
              "<h3>Submissions</h3>", _submissions_html(section)]
     parts += [track_html(t) for t in section.tracks]
     parts += [table2_html(t) for t in section.table2]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..evaluation.task_rules import describe_rules
 from .format import fmt_estimate, metric_title, track_title
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
 
@@ -79,6 +80,7 @@ def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]
     for sec in sections:
         out += [f"## {md_escape(sec.title)}", "",
                 f"Episodes: `{sec.dataset_path or '(path not recorded)'}`, manifest hash `{sec.manifest_hash}`", "",
+                f"Task rules: {md_escape(describe_rules(sec.task_rules) or '(not recorded)')}", "",
                 _submissions_markdown(sec), ""]
         out += [track_markdown(t) + "\n" for t in sec.tracks]
         out += [table2_markdown(t) + "\n" for t in sec.table2]

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -40,6 +42,8 @@ class Section:
     tracks: tuple[TrackTable, ...]
     table2: tuple[Table2, ...]
     figures: tuple[Figure, ...]
+    #: The task rules of the data set (summary.json `task_rules` of the section's submissions).
+    task_rules: Mapping[str, Any] = field(default_factory=dict, compare=False)
 
     @property
     def title(self) -> str:

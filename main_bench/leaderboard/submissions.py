@@ -6,8 +6,10 @@ in one table: `group_by_dataset` refuses them, or with `allow_mixed` returns one
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -31,6 +33,8 @@ class Submission:
     sensor_track: str
     #: False when the policy ran without the sandbox (`evaluate --no-sandbox`): marked on every row.
     sandboxed: bool = True
+    #: The task rules the submission was scored under (summary.json `task_rules`).
+    task_rules: Mapping[str, Any] = field(default_factory=dict, compare=False)
 
     @property
     def marks(self) -> tuple[str, ...]:
@@ -84,6 +88,7 @@ def submission_from_results(results: Results) -> Submission:
         dataset_path=_text(dataset.get("path")),
         sensor_track=sensor_track,
         sandboxed=not (isinstance(settings, dict) and settings.get("sandbox") is False),
+        task_rules=dict(summary.get("task_rules") or {}) if isinstance(summary.get("task_rules"), dict) else {},
     )
 
 

@@ -149,3 +149,29 @@ def test_recheck_names_a_navmesh_algorithm_change(cli, data, ep_cache):
     assert _validate(cli, data)[0] == 0  # the data set itself is sound
     code, report = _validate(cli, data, "--recheck", "--cache-dir", ep_cache)
     assert code == 1 and report["problem_counts"].get("navmesh_algorithm") == 1
+
+
+def test_validate_shows_the_task_rules_and_manifest_hash(cli, tmp_path, ep_scenes, ep_cache):
+    # Rules off the defaults, so the report shows the manifest's values and not DESIGN.md's.
+    out = tmp_path / "rules"
+    assert main(["episodes", "generate", "--scenes", str(ep_scenes / "scenes" / "box.obj"), "--out", str(out),
+                 "--cache-dir", str(ep_cache), "--up", "z", "--per-scene", "2", "--agents", "2", "--task", "shared",
+                 "--quiet", "--success-distance", "1.5", "--max-steps", "300", "--forward-step", "0.2",
+                 "--turn-angle", "15", "--camera", "160x120", "--hfov", "70", "--camera-height", "1.1",
+                 "--max-depth", "8"]) == 0
+    code, doc = _validate(cli, out)
+    assert code == 0 and doc["manifest_hash"] == sha256_file(out / "manifest.json")
+    rules = doc["task_rules"]
+    assert (rules["success_distance"], rules["max_steps"], rules["forward_step"], rules["turn_angle_deg"]) == (
+        1.5, 300, 0.2, 15.0)
+    assert rules["camera"] == {"width": 160, "height": 120, "hfov_deg": 70.0, "height_m": 1.1, "max_depth": 8.0}
+    text = cli("episodes", "validate", out).out
+    assert f"manifest sha256 {doc['manifest_hash']}" in text
+    assert ("success within 1.5 m; at most 300 steps per agent; actions found, move_forward 0.2 m, "
+            "turn_left/turn_right 15 deg; camera 160x120 px, hfov 70 deg at 1.1 m, depth to 8 m") in text
+    # An edited rule changes the hash an organiser compares with the published one.
+    doc_m = json.loads((out / "manifest.json").read_text())
+    doc_m["settings"]["success_distance"] = 3.0
+    (out / "manifest.json").write_text(json.dumps(doc_m))
+    code, edited = _validate(cli, out)
+    assert edited["task_rules"]["success_distance"] == 3.0 and edited["manifest_hash"] != doc["manifest_hash"]

@@ -225,3 +225,32 @@ def test_records_that_appear_twice_are_refused(tmp_path, episodes_dir):
     (r / "summary.json").write_text(json.dumps(summary))
     with pytest.raises(ResultsError, match="appear twice"):
         build_leaderboard([r], tmp_path / "lb", FAST)
+
+
+def _with_rules(results: Path, success: float, steps: int) -> Path:
+    """Give a fixture's summary.json the `task_rules` that evaluate records from the data set's manifest."""
+    doc = json.loads((results / "summary.json").read_text())
+    doc["task_rules"] = {"success_distance": success, "max_steps": steps, "goal_radius": 0.5, "agent_radius": 0.18,
+                         "agent_height": 1.5, "max_climb": 0.2, "forward_step": 0.25, "turn_angle_deg": 30.0,
+                         "camera": {"width": 128, "height": 128, "hfov_deg": 90.0, "height_m": 1.25,
+                                    "max_depth": 10.0}}
+    (results / "summary.json").write_text(json.dumps(doc))
+    return results
+
+
+def test_each_section_shows_its_task_rules(tmp_path, episodes_dir):
+    a = _with_rules(make_results(tmp_path / "a", episodes_dir, "Method A", 0.6, manifest_hash="a" * 64), 1.0, 500)
+    b = _with_rules(make_results(tmp_path / "b", episodes_dir, "Method B", 0.6, manifest_hash="b" * 64), 1.5, 300)
+    report = build_leaderboard([a, b], tmp_path / "lb", LeaderboardSettings(allow_mixed=True, plots=False,
+                                                                            tables=TableSettings(n_resamples=200)))
+    page, readme = report.index_html.read_text(), report.readme_md.read_text()
+    for rules in ("success within 1 m; at most 500 steps per agent", "success within 1.5 m; at most 300 steps"):
+        assert rules in page and rules in readme
+    camera = "camera 128x128 px, hfov 90 deg at 1.25 m, depth to 10 m; agent radius 0.18 m"
+    assert page.count(camera) == 2 and readme.count(camera) == 2
+    # Each section's rules sit under its own heading, beside its manifest hash.
+    sec_a, sec_b = readme.split("## Data set ")[1:3]
+    assert "a" * 64 in sec_a and "within 1 m" in sec_a and "b" * 64 in sec_b and "within 1.5 m" in sec_b
+    # Results written before rules were recorded say so rather than show nothing.
+    old = make_results(tmp_path / "old", episodes_dir, "Old", 0.5)
+    assert "Task rules: (not recorded)" in build_leaderboard([old], tmp_path / "lb2", FAST).readme_md.read_text()
