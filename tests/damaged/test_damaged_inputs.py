@@ -123,3 +123,43 @@ def test_damaged_input(cli, pristine, tmp_path, rel, damage, argv, out, code, na
     _check_one_line(res, str(root / named) if code == 2 else named.rsplit("/", 1)[-1], code)
     if out:
         assert snapshot(root / out) == before, f"{out} changed"
+
+
+RESUME = ["evaluate", "--episodes", "{d}/data", "--split", "val", "--agent", "baseline:random", "--out", "{r}/run",
+          "--limit", "1", "--no-progress"]
+
+
+@pytest.fixture(scope="module")
+def evaluated(pristine, tmp_path_factory) -> Path:
+    """The pristine inputs plus a finished evaluation (`run/`) of the random baseline, one episode per track."""
+    from main_bench.cli.app import main
+
+    root = tmp_path_factory.mktemp("evaluated") / "case"
+    shutil.copytree(pristine, root)
+    assert main([a.replace("{r}", str(root)).replace("{d}", str(root)) for a in RESUME]) == 0
+    return root
+
+
+@pytest.mark.parametrize("damage", list(DAMAGES))
+@pytest.mark.parametrize("kind", ["records", "trajectories"])
+def test_resumed_evaluation_with_a_damaged_part(cli, evaluated, tmp_path, kind, damage):
+    """A finished chunk's part file damaged after the run: resuming names it; the rest of the run is kept."""
+    root = tmp_path / "case"  # the run is copied; the data set stays where the run's identity says it is
+    shutil.copytree(evaluated / "run", root / "run")
+    target = next(iter(sorted((root / "run" / kind).rglob("part-*.parquet"))))
+    DAMAGES[damage](target)
+    before = snapshot(root / "run")
+    res = cli(*[a.replace("{r}", str(root)).replace("{d}", str(evaluated)) for a in RESUME])
+    if kind == "trajectories":  # the summary is computed from the records only: the resumed run stands
+        assert res.code == 0, res.err
+        before = snapshot(root / "run")
+        res = cli("visualize", root / "run", "--episode", _first_episode(root), "--out", root / "ep.png")
+    _check_one_line(res, str(target), 2)
+    assert snapshot(root / "run") == before
+
+
+def _first_episode(root: Path) -> str:
+    import pyarrow.parquet as pq
+
+    part = next(iter(sorted((root / "run" / "records").rglob("part-*.parquet"))))
+    return str(pq.read_table(part).column("episode_id")[0])
