@@ -78,13 +78,16 @@ def build(
         "out": str(out),
         "reused": reused,
         "seconds": round(time.perf_counter() - start, 3),
+        "up_axis": loaded.up_axis,
+        "up_reason": loaded.up_reason,
         **nm.info(),
     }
     emit(
         "navmesh build",
         payload,
         as_json,
-        lambda d: ("reused" if d["reused"] else "wrote") + f" {d['out']}\n" + _render_info(d),
+        lambda d: ("reused" if d["reused"] else "wrote") + f" {d['out']}\n"
+        + f"up axis    +{d['up_axis'].upper()} in the file ({d['up_reason']})\n" + _render_info(d),
     )
 
 

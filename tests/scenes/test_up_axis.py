@@ -73,6 +73,7 @@ def test_ceilingless_room_loads_z_up_and_says_why(cli, tmp_path, thick, suffix):
     import json
 
     info = json.loads(r.out)
+    assert info["up_axis"] == "z" and "enclose" in info["up_reason"]
     assert info["floors"][0]["z"] == pytest.approx(0.0, abs=0.06)
     assert (W - 0.4) * (D - 0.4) <= info["navigable_area"] <= W * D
 
