@@ -110,9 +110,9 @@ def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
         else:
             navmesh = NavMesh.build(scene, nav_settings)
     except NavMeshError as exc:
-        if exc.path is not None:
+        if exc.path is not None and exc.path != Path(spec["scene_path"]):
             raise
-        raise NavMeshError(f"scene {spec['scene_id']!r}: {exc}; or leave this scene out of --scenes",
+        raise NavMeshError(f"scene {spec['scene_id']!r}: {exc.problem}; or leave this scene out of --scenes",
                            path=spec["scene_path"]) from None
     bank = TargetBank(scene, navmesh, settings)
     separation = settings.separation(nav_settings.agent_radius)

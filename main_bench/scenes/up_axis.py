@@ -97,7 +97,7 @@ def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, is_gltf: bool, p
     keep = area2 > 0
     tri, normals, area = tri[keep], cross[keep] / area2[keep, None], area2[keep] / 2
     if up in ("y", "z"):
-        ev = frame_evidence(tri, normals, area, up, metres(up))  # type: ignore[arg-type]
+        ev = frame_evidence(tri, normals, area, up, metres(up), standing=False)  # type: ignore[arg-type]
         if ev.floor_z is None or ev.walls_below > WALLS_BELOW_MAX:
             raise SceneError(f"no floor with --up {up}: {ev.describe()}; check the file or its --up", path=path)
         return up, "given"  # type: ignore[return-value]
@@ -129,9 +129,12 @@ def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, is_gltf: bool, p
                      "along Z); give --up y or --up z", path=path)
 
 
-def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis: Axis,
-                   metres: float) -> FrameEvidence:
-    """Floor, walls and enclosure of the frame where file axis `axis` is up (faces in file units)."""
+def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis: Axis, metres: float,
+                   standing: bool = True) -> FrameEvidence:
+    """Floor, walls and enclosure of the frame where file axis `axis` is up (faces in file units).
+
+    `standing` False takes the lowest large horizontal band as the floor without asking for room to stand
+    (a given --up: a narrow floor is then the navmesh's to report, with the agent radius to change)."""
     k = 1 if axis == "y" else 2
     h = [i for i in range(3) if i != k]
     tri = tri * metres
@@ -148,12 +151,12 @@ def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis:
         segs = _slice(tri2, heights, floor_z + RAY_HEIGHT_M)
         points = _sample(tri2[in_floor], area[in_floor])
         points = points[_clearance(points, segs) >= CLEARANCE_M]
-        if len(points) >= STANDABLE_MIN * RAY_POINTS:
+        if not standing or len(points) >= STANDABLE_MIN * RAY_POINTS:
             floor = (floor_z, floor_area, segs, points)
             break
     if floor is None:
-        return FrameEvidence(axis, flat, None, 0.0, 0.0, False, None,
-                             f"no horizontal surface of {FLOOR_MIN_M2:g} m^2 or more with room to stand")
+        return FrameEvidence(axis, flat, None, 0.0, 0.0, False, None, f"no horizontal surface of {FLOOR_MIN_M2:g} "
+                             "m^2 or more" + (" with room to stand" if standing else ""))
     floor_z, floor_area, segs, points = floor
     wall_lo = heights[vertical].min(axis=1)
     wall_area = area[vertical]
