@@ -21,7 +21,8 @@ from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
 from main_bench.episodes.shards import write_shard
-from main_bench.evaluation.records import RECORD_SCHEMA, TEAM, TRAJECTORY_SCHEMA
+from main_bench.evaluation.ledger import file_hashes
+from main_bench.evaluation.records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
 from main_bench.evaluation.results import write_part
 from main_bench.io import atomic_write_json, sha256_file
 from main_bench.navmesh import NavMeshSettings
@@ -84,6 +85,7 @@ def make_results(root: Path, dataset: Path) -> Path:
     from main_bench.episodes.dataset import load_table
 
     table = load_table(dataset).to_pylist()
+    written = []
     for split, task, n in TRACKS:
         eps = [e for e in table if e["task"] == task and e["agents"] == n]
         recs, traj = [], []
@@ -97,9 +99,12 @@ def make_results(root: Path, dataset: Path) -> Path:
                 traj += [dict(episode_id=ep["episode_id"], step=t, agent_index=i, action=-1 if t == 0 else 1,
                               x=x + 0.25 * t, y=y, z=z, yaw=0.0, collided=False, distance_to_goal=1.0)
                          for t in range(5)]
-        write_part(root, "records", split, task, n, 0, pa.Table.from_pylist(recs, schema=RECORD_SCHEMA))
-        write_part(root, "trajectories", split, task, n, 0, pa.Table.from_pylist(traj, schema=TRAJECTORY_SCHEMA))
-    summary = {"schema_version": 1, "toolkit_version": "corpus",
+        written.append(write_part(root, "records", split, task, n, 0,
+                                  pa.Table.from_pylist(recs, schema=RECORD_SCHEMA)))
+        written.append(write_part(root, "trajectories", split, task, n, 0,
+                                  pa.Table.from_pylist(traj, schema=TRAJECTORY_SCHEMA)))
+    summary = {"schema_version": RESULTS_SCHEMA_VERSION, "toolkit_version": "corpus",
+               "files": file_hashes(root, written),
                "submission": {"name": "corpus", "description": "", "links": [], "date": "", "baseline": False},
                "dataset": {"path": str(dataset), "manifest_hash": sha256_file(dataset / "manifest.json")},
                "settings": {}, "counts": {}, "tracks": {}}

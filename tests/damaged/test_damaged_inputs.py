@@ -143,23 +143,12 @@ def evaluated(pristine, tmp_path_factory) -> Path:
 @pytest.mark.parametrize("damage", list(DAMAGES))
 @pytest.mark.parametrize("kind", ["records", "trajectories"])
 def test_resumed_evaluation_with_a_damaged_part(cli, evaluated, tmp_path, kind, damage):
-    """A finished chunk's part file damaged after the run: resuming names it; the rest of the run is kept."""
+    """A finished chunk's part file damaged after the run: resuming names it and changes nothing."""
     root = tmp_path / "case"  # the run is copied; the data set stays where the run's identity says it is
     shutil.copytree(evaluated / "run", root / "run")
     target = next(iter(sorted((root / "run" / kind).rglob("part-*.parquet"))))
     DAMAGES[damage](target)
     before = snapshot(root / "run")
     res = cli(*[a.replace("{r}", str(root)).replace("{d}", str(evaluated)) for a in RESUME])
-    if kind == "trajectories":  # the summary is computed from the records only: the resumed run stands
-        assert res.code == 0, res.err
-        before = snapshot(root / "run")
-        res = cli("visualize", root / "run", "--episode", _first_episode(root), "--out", root / "ep.png")
-    _check_one_line(res, str(target), 2)
+    _check_one_line(res, str(target), 2)  # the chunk ledger's hash, or the reader, names the part
     assert snapshot(root / "run") == before
-
-
-def _first_episode(root: Path) -> str:
-    import pyarrow.parquet as pq
-
-    part = next(iter(sorted((root / "run" / "records").rglob("part-*.parquet"))))
-    return str(pq.read_table(part).column("episode_id")[0])
