@@ -101,8 +101,11 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
 
 
 @njit(cache=True)
-def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats=np.zeros(4, np.int64)):
+def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
     """Multi-source any-angle Dijkstra. Returns (g, anchor, root) per node; anchor and root -1 where unreached.
+
+    stats: (4,) int64 counters, added to (segment walks, cells walked, walks that saw, nodes settled). A
+    required argument: an array default would put its id() into numba's cache key (a compile per process).
 
     (px, py, pz): each node's point (its corner point near walls, see `build.anchor_offsets`), (cx, cy): the
     centres of their cells.

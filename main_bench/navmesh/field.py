@@ -43,7 +43,7 @@ class DistanceField:
         self._tpos_surface[:, 2] = g.z[safe]
         self._g, self._anchor, self._root = _field.propagate(g.nbr, navmesh._ax, navmesh._ay, g.zs, nodes,
                                                              self._tpos, LINE_Z_TOLERANCE, g.cell_size,
-                                                             navmesh._px, navmesh._py)
+                                                             navmesh._px, navmesh._py, np.zeros(4, np.int64))
 
     @property
     def reachable_targets(self) -> np.ndarray:
