@@ -155,7 +155,7 @@ class MainParallelEnv(ParallelEnv):
         self._loop = LoopSettings(rules=rules, track=self.track, forward_step=self.sim_settings.forward_step,
                                   turn_angle=math.radians(self.sim_settings.turn_angle_deg))
         self._judge = EpisodeJudge(rules, episode.num_agents)
-        self._sim = self._resources.simulator(episode.scene_id, episode.num_agents)
+        self._sim = self._resources.simulator(episode.scene_id)
         self._fields = self._resources.fields(episode)
         self._targets = target_observations(episode)
         self._sim.reset(np.asarray(episode.start_positions), np.asarray(episode.start_yaws),

@@ -34,11 +34,12 @@ def run_inline(settings: EvalSettings, chunks: Sequence[Chunk], on_message: OnMe
         ctx.close()
 
 
-def _local_worker(settings: EvalSettings, jobs: Any, results: Any) -> None:
+def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any) -> None:
     ctx = None
     try:
         ctx = WorkerContext(settings)
         while True:
+            results.put(("want", wid))
             chunk = jobs.get()
             if chunk is None:
                 break
@@ -57,19 +58,41 @@ def _local_worker(settings: EvalSettings, jobs: Any, results: Any) -> None:
         results.put(("exit", None))
 
 
+class Blocks:
+    """Hands out chunks to `n` workers: worker k works through the k-th contiguous block of the (scene-ordered)
+    chunks, so it stays on few scenes; an idle worker takes the last chunk of the block with most episodes left.
+    Which worker runs a chunk changes no file."""
+
+    def __init__(self, chunks: Sequence[Chunk], n: int) -> None:
+        total = sum(len(c.episode_ids) for c in chunks)
+        self.blocks: list[list[Chunk]] = [[] for _ in range(n)]
+        seen = 0
+        for chunk in chunks:
+            self.blocks[min(n - 1, seen * n // max(total, 1))].append(chunk)
+            seen += len(chunk.episode_ids)
+
+    def next(self, worker: int) -> Chunk | None:
+        """The next chunk for `worker`, or None when every chunk has been handed out."""
+        own = self.blocks[worker]
+        if own:
+            return own.pop(0)
+        richest = max(self.blocks, key=lambda b: sum(len(c.episode_ids) for c in b))
+        return richest.pop() if richest else None
+
+
 def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage) -> None:
-    """Run the chunks on `workers` spawned processes (fresh interpreters: no simulator or GL state shared)."""
+    """Run the chunks on `workers` spawned processes (fresh interpreters: no simulator or GL state shared), each
+    working through its own contiguous block of `chunks` (see `Blocks`)."""
     if workers <= 1 or len(chunks) <= 1:
         run_inline(settings, chunks, on_message)
         return
     context = mp.get_context("spawn")
-    jobs, results = context.Queue(), context.Queue()
     n = min(workers, len(chunks))
-    for chunk in chunks:
-        jobs.put(chunk)
-    for _ in range(n):
-        jobs.put(None)
-    procs = [context.Process(target=_local_worker, args=(settings, jobs, results), daemon=False) for _ in range(n)]
+    blocks = Blocks(chunks, n)
+    jobs = [context.Queue() for _ in range(n)]
+    results = context.Queue()
+    procs = [context.Process(target=_local_worker, args=(settings, k, jobs[k], results), daemon=False)
+             for k in range(n)]
     for p in procs:
         p.start()
     done, exited = 0, 0
@@ -83,6 +106,9 @@ def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_
                     raise RuntimeError(f"a worker process died (exit code {dead[0].exitcode}); "
                                        "finished chunks are kept: run the same command again to resume") from None
                 continue
+            if kind == "want":
+                jobs[value].put(blocks.next(value))
+                continue
             if kind == "error":
                 raise pickle.loads(value)
             if kind == "exit":
@@ -93,13 +119,17 @@ def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_
             if kind == "chunk":
                 done += 1
             on_message(kind, value)
+        for q in jobs:  # every chunk is done: let the workers close their simulators and policy processes
+            q.put(None)
+        for p in procs:
+            p.join(timeout=30)
     finally:
         for p in procs:
             if p.is_alive():
                 p.terminate()
         for p in procs:
             p.join(timeout=10)
-        for q in (jobs, results):
+        for q in (*jobs, results):
             with contextlib.suppress(Exception):
                 q.close()
                 q.cancel_join_thread()

@@ -16,15 +16,18 @@ import numpy as np
 from ..episodes.schema import Episode
 from .episode_loop import target_key
 
-#: Target distance fields kept (they are rebuilt on a miss; results do not depend on this).
-FIELD_CACHE = 64
+#: Memory (MiB) of the target distance fields kept, least recently used dropped first (they are rebuilt on a
+#: miss; results do not depend on this). A field takes 24 bytes per navmesh cell: about 1 MiB on a built-in house.
+FIELD_CACHE_MIB = 256
+#: Scenes whose simulators are kept (least recently used closed first): switching back to one costs nothing.
+SIM_CACHE = 4
 #: Extra clearance (metres) of the navmesh the privileged baselines plan on, so their paths keep off walls.
 PLAN_MARGIN = 0.1
 
 
 class EpisodeResources:
-    """Loads and caches, for one data set: scenes with their navmeshes, one `Simulator` per (scene, team size)
-    (only the current scene's are kept), and each target's distance field. `close()` when done."""
+    """Loads and caches, for one data set: scenes with their navmeshes, one `Simulator` per scene (the
+    `SIM_CACHE` most recently used are kept), and each target's distance field. `close()` when done."""
 
     def __init__(self, manifest: Any, sim_settings: Any, cache_dir: Path | None = None, seed: int = 0) -> None:
         self.manifest = manifest
@@ -33,8 +36,9 @@ class EpisodeResources:
         self.seed = int(seed)
         self._scenes: dict[str, tuple[Any, Any]] = {}
         self._plan_navmeshes: dict[str, Any] = {}
-        self._sims: dict[tuple[str, int], Any] = {}
+        self._sims: OrderedDict[str, Any] = OrderedDict()
         self._fields: OrderedDict[tuple, Any] = OrderedDict()
+        self._field_bytes = 0
 
     def scene(self, scene_id: str) -> tuple[Any, Any]:
         """(Scene, NavMesh) of `scene_id`, built with the data set's navmesh settings (cached on disk)."""
@@ -57,17 +61,18 @@ class EpisodeResources:
 
         return Path(default_cache_dir()) / "navmesh"
 
-    def simulator(self, scene_id: str, agents: int) -> Any:
-        """The `Simulator` of `agents` agents in `scene_id`; simulators of other scenes are closed."""
-        key = (scene_id, agents)
-        if key not in self._sims:
+    def simulator(self, scene_id: str) -> Any:
+        """The `Simulator` of `scene_id` (for any team size: `Simulator.reset` places the episode's agents)."""
+        if scene_id in self._sims:
+            self._sims.move_to_end(scene_id)
+        else:
             from ..sim import Simulator
 
-            for old in [k for k in self._sims if k[0] != scene_id]:
-                self._sims.pop(old).close()
             scene, navmesh = self.scene(scene_id)
-            self._sims[key] = Simulator(scene, navmesh, self.sim_settings, seed=self.seed)
-        return self._sims[key]
+            self._sims[scene_id] = Simulator(scene, navmesh, self.sim_settings, seed=self.seed)
+            while len(self._sims) > SIM_CACHE:
+                self._sims.popitem(last=False)[1].close()
+        return self._sims[scene_id]
 
     def _plan_navmesh(self, scene_id: str) -> Any:
         """The privileged baselines' planning navmesh: the data set's, eroded by `PLAN_MARGIN` more."""
@@ -105,8 +110,9 @@ class EpisodeResources:
                         raise
                     field = None
                 self._fields[key] = field
-                while len(self._fields) > FIELD_CACHE:
-                    self._fields.popitem(last=False)
+                self._field_bytes += _nbytes(field)
+                while self._field_bytes > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:
+                    self._field_bytes -= _nbytes(self._fields.popitem(last=False)[1])
             out.append(self._fields[key])
         return out
 
@@ -115,3 +121,7 @@ class EpisodeResources:
         for sim in self._sims.values():
             sim.close()
         self._sims.clear()
+
+
+def _nbytes(field: Any) -> int:
+    return 0 if field is None else field.nbytes

@@ -85,9 +85,15 @@ def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
         raise DatasetError(f"no episodes for the chosen --task/--agents in split {settings.split!r}; "
                            f"it has task/agents {have}", path=settings.episodes)
     chunks: list[Chunk] = []
+    scene_of: dict[str, str] = {}
     for task, agents in chosen:
-        ids = load_table(settings.episodes, settings.split, task, agents).column("episode_id").to_pylist()
+        table = load_table(settings.episodes, settings.split, task, agents).select(["episode_id", "scene_id"])
+        ids = table.column("episode_id").to_pylist()
+        scene_of.update(zip(ids, table.column("scene_id").to_pylist(), strict=True))
         chunks.extend(make_chunks(settings.split, task, agents, ids, settings.chunk_size, settings.limit))
+    # Run order only (files do not depend on it): a scene's chunks together, so that a worker keeps its scene's
+    # simulator and target fields, and consecutive chunks go to the same worker (see `executors.run_local`).
+    chunks.sort(key=lambda c: (scene_of[c.episode_ids[0]], c.task, c.agents, c.part))
     return manifest, chunks
 
 

@@ -137,7 +137,7 @@ class WorkerContext:
         steps_total = 0
         for episode_id in chunk.episode_ids:
             episode = self._episode(chunk, episode_id)
-            sim = self.resources.simulator(episode.scene_id, episode.num_agents)
+            sim = self.resources.simulator(episode.scene_id)
             fields = self.resources.fields(episode)
             plan_fields = self.resources.fields(episode, planning=True) if self._privileged else None
             trace, failure, steps = run_episode(episode, sim, fields, policy, loop, self.settings.seed,

@@ -46,6 +46,11 @@ class DistanceField:
                                                              navmesh._px, navmesh._py, np.zeros(4, np.int64))
 
     @property
+    def nbytes(self) -> int:
+        """Memory held by the field's per-cell arrays (bytes)."""
+        return self._g.nbytes + self._anchor.nbytes + self._root.nbytes
+
+    @property
     def reachable_targets(self) -> np.ndarray:
         """(M,) bool: which targets lie on (or within 0.5 m of) the navmesh."""
         return self.target_nodes >= 0
