@@ -1,0 +1,257 @@
+"""End-to-end speed: what a user waits for, timed as the user runs it (fresh processes, the real CLI).
+
+- start-up: `main-bench --help` and `import main_bench.cli.app`, next to a bare `python -c pass`;
+- numba: kernels a second process compiles (`compiles.py`'s workload run twice on this machine's cache);
+- evaluate: `main-bench evaluate` on the committed sample's val split with each baseline, at 1 and 2 local
+  workers (wall and CPU seconds of the whole command, the 2-worker speed-up printed); repeats interleaved;
+- episodes generate: `main-bench episodes generate` on built-in houses at 1 and 2 workers;
+- env: the PettingZoo env's agent-steps per second with move-only actions (long episodes) and uniform random
+  actions (short episodes: an agent soon calls `found`), interleaved, after a warm-up that starts every episode
+  once (a long training run's steady state: every simulator and target field made); reset times within a scene
+  and when switching back to a scene seen before;
+- demo: `main-bench demo` (full run only).
+
+Every figure is a median over repeats; the machine's load is recorded at the start and end (it is shared).
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from . import machine_done, machine_info
+
+BASELINES = ("random", "oracle", "comm")
+#: The bar of issue 10.
+GOAL_HELP_S = 0.3
+GOAL_WORKERS_RATIO = 1.8
+GOAL_SHORT_OVER_LONG = 0.8
+
+
+def _sample() -> Path:
+    return Path(__file__).resolve().parents[2] / "episodes" / "sample"
+
+
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _timed(cmd: list[str], env: dict[str, str] | None = None) -> dict[str, Any]:
+    """Run `cmd`; wall and CPU seconds (all its processes that were waited for), stdout."""
+    cpu0, t0 = _children_cpu(), time.perf_counter()
+    res = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
+    wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu0
+    if res.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({res.returncode}): {res.stderr.strip()[-400:]}")
+    return {"wall_s": wall, "cpu_s": cpu, "stdout": res.stdout}
+
+
+def _median(runs: list[dict[str, Any]], key: str) -> float:
+    return round(statistics.median(r[key] for r in runs), 3)
+
+
+def _cli() -> list[str]:
+    return [sys.executable, "-m", "main_bench.cli.app"]
+
+
+def startup(repeats: int) -> dict[str, Any]:
+    """Median wall seconds of `--help`, of importing the CLI, and of a bare interpreter."""
+    cmds = {"help": [*_cli(), "--help"], "import_cli": [sys.executable, "-c", "import main_bench.cli.app"],
+            "bare_python": [sys.executable, "-c", "pass"]}
+    runs: dict[str, list[dict]] = {k: [] for k in cmds}
+    for _ in range(repeats):
+        for key, cmd in cmds.items():
+            runs[key].append(_timed(cmd))
+    out = {f"{k}_s": _median(v, "wall_s") for k, v in runs.items()}
+    out["help_goal_met"] = out["help_s"] < GOAL_HELP_S
+    return out
+
+
+def compiles() -> dict[str, Any]:
+    """Kernels compiled by two processes in a row running `compiles.workload` on this machine's numba cache."""
+    docs = [json.loads(_timed([sys.executable, "-m", "main_bench.benchmarks.compiles"])["stdout"])
+            for _ in range(2)]
+    return {"kernels": len(docs[0]["kernels"]), "first_process_compiled": len(docs[0]["compiled"]),
+            "second_process_compiled": len(docs[1]["compiled"])}
+
+
+def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | None, comm_limit: int,
+                     repeats: int) -> dict[str, Any]:
+    """`main-bench evaluate` at 1 and 2 workers per baseline: medians and the 2-worker speed-up."""
+    out: dict[str, Any] = {}
+    for name in baselines:
+        lim = comm_limit if name == "comm" else limit
+        runs: dict[int, list[dict]] = {1: [], 2: []}
+        for rep in range(repeats):
+            for workers in (1, 2):
+                dest = workdir / f"eval-{name}-{workers}-{rep}"
+                cmd = [*_cli(), "evaluate", "--episodes", str(_sample()), "--split", "val", "--agent",
+                       f"baseline:{name}", "--out", str(dest), "--workers", str(workers), "--no-progress", "--json"]
+                if lim is not None:
+                    cmd += ["--limit", str(lim)]
+                run = _timed(cmd)
+                doc = json.loads(run["stdout"])
+                run["episodes"] = doc["episodes_run"]
+                runs[workers].append(run)
+                shutil.rmtree(dest, ignore_errors=True)
+        w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
+        out[name] = {"episodes": runs[1][0]["episodes"], "limit_per_track": lim,
+                     "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
+                     "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
+                     "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
+                     "ratios": [round(a["wall_s"] / b["wall_s"], 2) for a, b in zip(runs[1], runs[2], strict=True)]}
+    return out
+
+
+def first_episode(workdir: Path, repeats: int) -> dict[str, Any]:
+    """Wall seconds of `evaluate --limit 1 --task shared --agents 2` with `baseline:oracle` (one episode)."""
+    runs = []
+    for rep in range(repeats):
+        dest = workdir / f"first-{rep}"
+        runs.append(_timed([*_cli(), "evaluate", "--episodes", str(_sample()), "--split", "val", "--agent",
+                            "baseline:oracle", "--out", str(dest), "--limit", "1", "--task", "shared", "--agents",
+                            "2", "--no-progress", "--json"]))
+        shutil.rmtree(dest, ignore_errors=True)
+    return {"wall_s": _median(runs, "wall_s"), "cpu_s": _median(runs, "cpu_s")}
+
+
+def generate_scaling(workdir: Path, houses: int, per_scene: int, repeats: int) -> dict[str, Any]:
+    """`main-bench episodes generate` on the first `houses` built-in val houses at 1 and 2 workers."""
+    from ..scenes import builtin
+
+    ids = [i for i in builtin.builtin_split().scene_ids if builtin.builtin_split().split_of(i) == "val"][:houses]
+    paths = builtin.ensure_builtin_scenes(ids, builtin.default_cache_dir())
+    runs: dict[int, list[dict]] = {1: [], 2: []}
+    for rep in range(repeats):
+        for workers in (1, 2):
+            dest = workdir / f"gen-{workers}-{rep}"
+            runs[workers].append(_timed(
+                [*_cli(), "episodes", "generate", *[a for i in ids for a in ("--scenes", str(paths[i]))],
+                 "--out", str(dest), "--per-scene", str(per_scene), "--agents", "2,3", "--workers", str(workers),
+                 "--json"]))
+            shutil.rmtree(dest, ignore_errors=True)
+    w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
+    return {"houses": ids, "per_scene": per_scene, "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
+            "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
+            "speedup_2_over_1": round(w1 / w2, 2) if w2 else None}
+
+
+def _env_pass(env: Any, mode: str, agent_steps: int, rng: Any) -> dict[str, Any]:
+    """Play until `agent_steps` agent-steps: move-only ("long") or uniform random ("short") actions."""
+    scene_of = {e.episode_id: e.scene_id for e in env.episodes}
+    steps, resets = 0, {"same_scene": [], "switch": []}
+    _, infos = env.reset()
+    scene = scene_of[next(iter(infos.values()))["episode_id"]]
+    t0 = time.perf_counter()
+    while steps < agent_steps:
+        if not env.agents:
+            t1 = time.perf_counter()
+            _, infos = env.reset()
+            elapsed = time.perf_counter() - t1
+            before, scene = scene, scene_of[next(iter(infos.values()))["episode_id"]]
+            resets["same_scene" if scene == before else "switch"].append(elapsed)
+        actions = {a: 1 if mode == "long" else int(rng.integers(4)) for a in env.agents}
+        env.step(actions)
+        steps += len(actions)
+    return {"rate": steps / (time.perf_counter() - t0), "resets": resets}
+
+
+def env_resets(agent_steps: int, repeats: int) -> dict[str, Any]:
+    """Env agent-steps/s with long (move-only) and short (uniform random) episodes; reset times."""
+    import numpy as np
+
+    from ..env import create
+
+    env = create(str(_sample()), split="train", agents=2, task="shared", goal="object", seed=0)
+    try:
+        for episode in env.episodes:  # warm-up, as in a long training run: every scene, simulator, target field
+            env.reset(options={"episode_id": episode.episode_id})
+        rates: dict[str, list[float]] = {"long": [], "short": []}
+        same: list[float] = []
+        switch: list[float] = []
+        for rep in range(repeats):
+            for mode in ("long", "short"):
+                res = _env_pass(env, mode, agent_steps, np.random.default_rng(rep))
+                rates[mode].append(res["rate"])
+                same += res["resets"]["same_scene"]
+                switch += res["resets"]["switch"]
+    finally:
+        env.close()
+    long_rate, short_rate = statistics.median(rates["long"]), statistics.median(rates["short"])
+    return {"split": "train", "agents": 2, "task": "shared", "agent_steps_per_pass": agent_steps,
+            "long_agent_steps_per_s": round(long_rate, 1), "short_agent_steps_per_s": round(short_rate, 1),
+            "short_over_long": round(short_rate / long_rate, 3),
+            "reset_ms_same_scene": round(1e3 * statistics.median(same), 2) if same else None,
+            "reset_ms_scene_seen_before": round(1e3 * statistics.median(switch), 2) if switch else None,
+            "resets_timed": {"same_scene": len(same), "switch": len(switch)}}
+
+
+def demo(workdir: Path) -> dict[str, Any]:
+    """Wall and CPU seconds of `main-bench demo` (default settings)."""
+    run = _timed([*_cli(), "demo", "--out", str(workdir / "demo"), "--json"])
+    return {"wall_s": round(run["wall_s"], 2), "cpu_s": round(run["cpu_s"], 2)}
+
+
+def run(quick: bool = False) -> dict[str, Any]:
+    """Run the benchmark (quick: few repeats, `--limit 8` evaluations, no demo; full: the whole val split of the
+    sample, `baseline:comm` on 8 episodes per track, 2 repeats); JSON-ready figures."""
+    machine = machine_info()
+    workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
+    try:
+        result: dict[str, Any] = {
+            "startup": startup(5 if quick else 15),
+            "numba": compiles(),
+            "first_episode": first_episode(workdir, 1 if quick else 3),
+            "evaluate": evaluate_scaling(workdir, BASELINES, 8 if quick else None, 4 if quick else 8,
+                                         1 if quick else 2),
+            "env": env_resets(300 if quick else 1500, 1 if quick else 3),
+            "generate": generate_scaling(workdir, 2, 4 if quick else 20, 1 if quick else 2),
+        }
+        if not quick:
+            result["demo"] = demo(workdir)
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+    oracle = result["evaluate"].get("oracle", {})
+    result["goals"] = {
+        "help_s_below": GOAL_HELP_S, "help_met": result["startup"]["help_goal_met"],
+        "second_process_compiles_zero": result["numba"]["second_process_compiled"] == 0,
+        "oracle_workers_ratio_at_least": GOAL_WORKERS_RATIO,
+        "oracle_workers_ratio_met": (oracle.get("speedup_2_over_1") or 0) >= GOAL_WORKERS_RATIO,
+        "env_short_over_long_at_least": GOAL_SHORT_OVER_LONG,
+        "env_short_over_long_met": result["env"]["short_over_long"] >= GOAL_SHORT_OVER_LONG,
+    }
+    return {"machine": machine_done(machine), "quick": quick, **result}
+
+
+def summary_lines(result: dict[str, Any]) -> list[str]:
+    """Human-readable lines of a `run` result."""
+    m, s, n = result["machine"], result["startup"], result["numba"]
+    lines = [f"machine: {m['cpus']} cpus, load {m['load_average_1min_at_start']} -> {m['load_average_1min_at_end']}",
+             f"start-up: --help {s['help_s']:.3f} s (goal < {GOAL_HELP_S}), import cli {s['import_cli_s']:.3f} s, "
+             f"bare python {s['bare_python_s']:.3f} s",
+             f"numba: {n['kernels']} kernels; compiled by the first process {n['first_process_compiled']}, "
+             f"by the second {n['second_process_compiled']}",
+             f"first episode (evaluate, one episode, oracle): {result['first_episode']['wall_s']:.2f} s"]
+    for name, row in result["evaluate"].items():
+        lines.append(f"evaluate baseline:{name} ({row['episodes']} episodes): 1 worker {row['workers_1']['wall_s']:.1f} s, "
+                     f"2 workers {row['workers_2']['wall_s']:.1f} s, speed-up {row['speedup_2_over_1']}x "
+                     f"(CPU {row['workers_1']['cpu_s']:.1f} / {row['workers_2']['cpu_s']:.1f} s)")
+    g = result["generate"]
+    lines.append(f"episodes generate: 1 worker {g['workers_1']['wall_s']:.1f} s, 2 workers {g['workers_2']['wall_s']:.1f} s, "
+                 f"speed-up {g['speedup_2_over_1']}x")
+    e = result["env"]
+    lines.append(f"env: long {e['long_agent_steps_per_s']} agent-steps/s, short {e['short_agent_steps_per_s']}, "
+                 f"short/long {e['short_over_long']} (goal >= {GOAL_SHORT_OVER_LONG}); reset "
+                 f"{e['reset_ms_same_scene']} ms same scene, {e['reset_ms_scene_seen_before']} ms scene seen before")
+    if "demo" in result:
+        lines.append(f"demo: {result['demo']['wall_s']} s")
+    return lines

@@ -1,0 +1,32 @@
+"""Local workers' chunk hand-out: each chunk exactly once, contiguous blocks first, idle workers take the rest."""
+
+from __future__ import annotations
+
+from main_bench.evaluation.chunks import make_chunks
+from main_bench.evaluation.executors import Blocks
+
+
+def _chunks(n_ids: int, size: int):
+    return make_chunks("val", "shared", 2, [f"e{i:03d}" for i in range(n_ids)], size, None)
+
+
+def test_every_chunk_once_and_blocks_contiguous():
+    chunks = _chunks(80, 8)
+    blocks = Blocks(chunks, 2)
+    first = [blocks.next(0) for _ in range(5)]
+    assert [c.part for c in first] == [0, 1, 2, 3, 4]  # worker 0: the first half, in order
+    second = [blocks.next(1) for _ in range(5)]
+    assert [c.part for c in second] == [5, 6, 7, 8, 9]
+    assert blocks.next(0) is None and blocks.next(1) is None
+
+
+def test_idle_worker_takes_from_the_fullest_block():
+    chunks = _chunks(96, 8)
+    blocks = Blocks(chunks, 3)
+    handed = [blocks.next(0) for _ in range(4)]  # worker 0 finishes its own block, then helps
+    handed += [blocks.next(0), blocks.next(1), blocks.next(2)]
+    while (c := blocks.next(1)) is not None:
+        handed.append(c)
+    assert handed[4].part == 7  # the last chunk of block 1 (the fullest, tied with block 2, comes first)
+    assert sorted(c.part for c in handed) == list(range(12))
+    assert blocks.next(2) is None

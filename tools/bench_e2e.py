@@ -1,0 +1,9 @@
+"""End-to-end speed benchmark: `python tools/bench_e2e.py [--json] [--quick]` (see main_bench.benchmarks.e2e)."""
+
+from __future__ import annotations
+
+from main_bench.benchmarks import tool_main
+from main_bench.benchmarks.e2e import run, summary_lines
+
+if __name__ == "__main__":
+    tool_main(__doc__, "few repeats, 8 episodes per track, no demo", run, lambda result: "\n".join(summary_lines(result)))
