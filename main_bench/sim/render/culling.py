@@ -35,21 +35,28 @@ class CellCuller:
         half = camera.hfov / 2.0
         self.cos_h, self.sin_h = float(np.cos(half)), float(np.sin(half))
 
+    def visible(self, eyes: np.ndarray, fwd: np.ndarray, right: np.ndarray) -> np.ndarray:
+        """(V, cells) bool: which cells each of V views (eyes, fwd, right: (V, 3)) can see."""
+        d = self.centres[None, :, :] - eyes[:, None, :2]
+        along = np.einsum("vcj,vj->vc", d, fwd[:, :2])
+        lateral = np.abs(np.einsum("vcj,vj->vc", d, right[:, :2]))
+        rad = self.radii
+        return (along >= -rad) & (along - rad <= self.reach) & (lateral * self.cos_h - along * self.sin_h <= rad)
+
+    def runs(self, eyes: np.ndarray, fwd: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Visible cells of V views merged into runs of consecutive cells: (view, first, count) int64 arrays,
+        one entry per run, ordered by view then position; first and count in face order x 3."""
+        vis = self.visible(np.atleast_2d(eyes), np.atleast_2d(fwd), np.atleast_2d(right))
+        padded = np.zeros((vis.shape[0], vis.shape[1] + 2), dtype=np.int8)
+        padded[:, 1:-1] = vis
+        step = np.diff(padded, axis=1)
+        view, start = np.nonzero(step == 1)
+        end = np.nonzero(step == -1)[1]  # exclusive; row-major order pairs each run's start with its end
+        first = self.first[start]
+        return view, first, self.first[end - 1] + self.count[end - 1] - first
+
     def ranges(self, eye: np.ndarray, fwd: np.ndarray, right: np.ndarray) -> list[tuple[int, int]]:
         """(first, count) index ranges, in face order x 3, of the cells visible from the view at `eye` (3,)
         looking along `fwd` (3,) with `right` (3,) to its right."""
-        d = self.centres - eye[:2]
-        along = d @ fwd[:2]
-        lateral = np.abs(d @ right[:2])
-        rad = self.radii
-        vis = (along >= -rad) & (along - rad <= self.reach) & (lateral * self.cos_h - along * self.sin_h <= rad)
-        idx = np.nonzero(vis)[0]
-        if len(idx) == 0:
-            return []
-        # Merge runs of consecutive cells into one draw each.
-        breaks = np.nonzero(np.diff(idx) != 1)[0] + 1
-        run_start = np.concatenate([[0], breaks])
-        run_end = np.concatenate([breaks, [len(idx)]]) - 1
-        first = self.first[idx[run_start]]
-        count = self.first[idx[run_end]] + self.count[idx[run_end]] - first
+        _, first, count = self.runs(eye, fwd, right)
         return list(zip(first.tolist(), count.tolist(), strict=True))

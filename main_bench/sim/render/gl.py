@@ -26,6 +26,7 @@ from ..settings import CameraSettings
 from .camera import NEAR_M, far_plane, focal_scales, view_axes
 from .culling import CellCuller
 from .materials import TEXTURE_SIZE, agent_colors, face_normals, scene_surfaces
+from .viewports import VIEWPORT_INDEX_EXTENSIONS, viewport_array_setter, viewport_index_extension
 
 #: Direction of the baked light (canonical frame); surfaces facing it or away from it are brightest.
 LIGHT_DIR = np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84])
@@ -39,7 +40,20 @@ class GLUnavailable(RuntimeError):
 
 # Shader sources are shared by three programs: MODE 0 untextured scene, 1 textured scene, 2 agents.
 _VERTEX = """
+#if ONE_PASS
+in vec3 in_eye;
+in vec3 in_fwd;
+in vec3 in_right;
+in int in_view;
+#define EYE in_eye
+#define FWD in_fwd
+#define RIGHT in_right
+#else
 layout(std140) uniform View { vec4 u_eye; vec4 u_fwd; vec4 u_right; ivec4 u_self; };
+#define EYE u_eye.xyz
+#define FWD u_fwd.xyz
+#define RIGHT u_right.xyz
+#endif
 uniform vec2 u_focal;
 uniform vec2 u_clip;
 in vec3 in_pos;
@@ -71,13 +85,15 @@ void main() {
     v_uv = in_uv;
     v_layer = in_layer;
 #endif
-    vec3 rel = world - u_eye.xyz;
-    float zc = dot(rel, u_fwd.xyz);
-    float xc = dot(rel, u_right.xyz);
+    vec3 rel = world - EYE;
+    float zc = dot(rel, FWD);
+    float xc = dot(rel, RIGHT);
     v_depth = zc;
     // Image row 0 at the top of its tile: y is flipped so the readback needs no flip.
     gl_Position = vec4(xc * u_focal.x, -rel.z * u_focal.y, u_clip.x * zc + u_clip.y, zc);
-#if MODE == 2
+#if ONE_PASS
+    gl_ViewportIndex = in_view;
+#elif MODE == 2
     if (gl_InstanceID == u_self.x) {
         gl_Position = vec4(0.0, 0.0, -2.0, 1.0);  // an agent never sees its own body: clipped away
     }
@@ -107,8 +123,10 @@ void main() {
 """
 
 
-def _source(body: str, mode: int) -> str:
-    return f"#version 330\n#define MODE {mode}\n{body}"
+def _source(body: str, mode: int, extension: str | None = None) -> str:
+    """A shader of `body` for MODE `mode`; one-pass rendering when `extension` (the viewport-index one)."""
+    head = f"#version 330\n#extension {extension} : require\n" if extension else "#version 330\n"
+    return f"{head}#define ONE_PASS {int(extension is not None)}\n#define MODE {mode}\n{body}"
 
 
 def baked_shade(normals: np.ndarray) -> np.ndarray:
@@ -173,43 +191,96 @@ def _indexed(rec: np.ndarray) -> tuple[bytes, bytes]:
     return verts.tobytes(), rank[inverse.ravel()].astype(np.uint32).tobytes()
 
 
+#: Per-view record of one-pass rendering (instanced attributes): eye, forward, right, viewport index.
+_VIEW_RECORD = np.dtype([("eye", "<f4", 3), ("fwd", "<f4", 3), ("right", "<f4", 3), ("view", "<i4")])
+_VIEW_FORMAT = ("3f 3f 3f 1i/i", "in_eye", "in_fwd", "in_right", "in_view")
+#: Per (viewer, other agent) record of one-pass rendering: the cylinder's offset and tint, then the view.
+_PAIR_RECORD = np.dtype([("offset", "<f4", 3), ("tint", "<f4", 3), ("eye", "<f4", 3), ("fwd", "<f4", 3),
+                         ("right", "<f4", 3), ("view", "<i4")])
+#: Scene batches with fewer faces than this are drawn whole: below it, view culling on llvmpipe costs more
+#: than the faces it skips (measured: docs/evaluation.md, "gl renderer").
+CULL_MIN_TRIANGLES = 20_000
+#: GL_RENDERER substrings of software rasterisers, on which one-pass rendering is slower than a pass per view
+#: (measured on llvmpipe: docs/evaluation.md), so it is used there only when asked for.
+SOFTWARE_GL_DEVICES = ("llvmpipe", "softpipe", "swrast", "swr")
+
+
 class _Batch:
-    """One culled, indexed vertex buffer of scene faces with its program; `closed`: all its faces belong to
-    closed outward-wound surfaces, so faces turned away from the viewer are skipped (back-face culling)."""
+    """One indexed vertex buffer of scene faces with its program; `closed`: all its faces belong to closed
+    outward-wound surfaces, so faces turned away from the viewer are skipped (back-face culling). Faces are
+    ordered by grid cell and culled per view (`culler`) when there are at least `cull_min` of them."""
 
     def __init__(self, ctx, prog, corners: np.ndarray, records, fmt: tuple[str, ...], camera: CameraSettings,
-                 closed: bool):
-        self.ctx, self.closed = ctx, closed
-        self.culler = CellCuller(corners, camera)
-        verts, index = _indexed(records(self.culler.order))
+                 closed: bool, cull_min: int = CULL_MIN_TRIANGLES):
+        self.ctx, self.closed, self.prog, self.fmt = ctx, closed, prog, fmt
+        self.culler = CellCuller(corners, camera) if len(corners) >= cull_min else None
+        order = self.culler.order if self.culler is not None else np.arange(len(corners))
+        self.indices = 3 * len(corners)
+        verts, index = _indexed(records(order))
         self.vbo, self.ibo = ctx.buffer(verts), ctx.buffer(index)
         self.vao = ctx.vertex_array(prog, [(self.vbo, *fmt)], index_buffer=self.ibo, index_element_size=4)
 
+    def bind_views(self, views) -> None:
+        """Rebuild the vertex array for one-pass rendering, with per-view records from the buffer `views`."""
+        self.vao.release()
+        self.vao = self.ctx.vertex_array(self.prog, [(self.vbo, *self.fmt), (views, *_VIEW_FORMAT)],
+                                         index_buffer=self.ibo, index_element_size=4)
+
     def draw(self, eye: np.ndarray, fwd: np.ndarray, right: np.ndarray) -> None:
+        """Per-view rendering: draw what the view at `eye` can see (the uniform block holds the view)."""
         _set_culling(self.ctx, self.closed)
+        if self.culler is None:
+            self.vao.render(vertices=self.indices)
+            return
         for first, count in self.culler.ranges(eye, fwd, right):
             self.vao.render(vertices=count, first=first)
+
+    def commands(self, eyes: np.ndarray, fwd: np.ndarray, right: np.ndarray, passes: list[range]) -> list:
+        """One-pass rendering: (M, 5) uint32 indirect draw commands (count, instances, first index, base
+        vertex, base instance = view) per pass of views."""
+        if self.culler is None:
+            return [np.array([[self.indices, len(p), 0, 0, p.start]], dtype=np.uint32) for p in passes]
+        view, first, count = self.culler.runs(eyes, fwd, right)
+        cmds = np.stack([count, np.ones_like(count), first, np.zeros_like(count), view], axis=1).astype(np.uint32)
+        cut = np.searchsorted(view, [p.start for p in passes] + [passes[-1].stop])
+        return [cmds[a:b] for a, b in zip(cut[:-1], cut[1:], strict=True)]
 
     def release(self) -> None:
         for obj in (self.vao, self.vbo, self.ibo):
             obj.release()
 
 
+class GLDeviceMissing(GLUnavailable):
+    """The EGL device asked for (`device_index`) does not exist on this machine."""
+
+
 class GLRenderer:
-    """Batched egocentric RGB-D renderer on moderngl + EGL (see the module docstring)."""
+    """Batched egocentric RGB-D renderer on moderngl + EGL (see the module docstring).
+
+    `device_index`: the EGL device to render on (as `eglQueryDevicesEXT` lists them: GPUs, then Mesa's
+    software device), None: EGL's default display. `one_pass`: render all views of a call in one pass (True;
+    raises GLUnavailable when the context cannot), one pass per view (False), or None: one pass when the
+    context allows it and is not a software rasteriser (SOFTWARE_GL_DEVICES). `cull_min_triangles`:
+    batches with fewer faces are drawn whole, without view culling.
+    """
 
     name = "gl"
 
     def __init__(self, scene: Scene, camera: CameraSettings, *, reason: str = "requested",
-                 agent_radius: float = 0.18, agent_height: float = 1.5) -> None:
+                 agent_radius: float = 0.18, agent_height: float = 1.5, device_index: int | None = None,
+                 one_pass: bool | None = None, cull_min_triangles: int = CULL_MIN_TRIANGLES) -> None:
         try:
             import moderngl
 
-            self._ctx = moderngl.create_standalone_context(backend="egl")
+            extra = {} if device_index is None else {"device_index": int(device_index)}
+            self._ctx = moderngl.create_standalone_context(backend="egl", **extra)
         except Exception as exc:  # missing libEGL, no driver, no device: all mean "no gl here"
+            if device_index is not None and "device index" in str(exc):
+                raise GLDeviceMissing(str(exc)) from None
             raise GLUnavailable(f"{type(exc).__name__}: {exc}") from None
         self.reason = reason
         self.camera = camera
+        self.device_index = device_index
         info = self._ctx.info
         self.device = str(info.get("GL_RENDERER", "unknown"))
         align = int(info.get("GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT", 256) or 256)
@@ -217,24 +288,40 @@ class GLRenderer:
         max_rows = min(int(info.get("GL_MAX_RENDERBUFFER_SIZE", 4096)), int(info.get("GL_MAX_VIEWPORT_DIMS",
                                                                                       (4096, 4096))[1]))
         self._views_per_pass = max(1, max_rows // camera.height)
+        self._extension = viewport_index_extension(set(self._ctx.extensions), self._ctx.version_code)
+        if one_pass is None and any(name in self.device.lower() for name in SOFTWARE_GL_DEVICES):
+            one_pass = False
+        self._set_viewports = viewport_array_setter() if self._extension and one_pass is not False else None
+        if self._set_viewports is None:
+            self._extension = None
+        else:
+            self._views_per_pass = min(self._views_per_pass, int(info.get("GL_MAX_VIEWPORTS", 16)))
+        if one_pass and self._extension is None:
+            self._ctx.release()
+            raise GLUnavailable(f"one-pass rendering needs GL 4.3 and {' or '.join(VIEWPORT_INDEX_EXTENSIONS)}; "
+                                f"{self.device} has GL {self._ctx.version_code}") from None
+        #: True when all views of a call are drawn in one pass (viewport index chosen in the vertex shader).
+        self.one_pass = self._extension is not None
         self._batches: list[_Batch] = []
-        self._fbo = self._rbs = self._ubo = self._inst = self._agent_vao = None
-        self._fbo_views = self._capacity = 0
+        self._fbo = self._rbs = self._ubo = self._inst = self._agent_vao = self._cmds = None
+        self._fbo_views = self._capacity = self._cmd_capacity = 0
         try:
-            self._setup(scene, camera, agent_radius, agent_height)
+            self._setup(scene, camera, agent_radius, agent_height, cull_min_triangles)
         except Exception as exc:
             self._ctx.release()
             raise GLUnavailable(f"context created but setup failed ({type(exc).__name__}: {exc})") from None
 
-    def _setup(self, scene: Scene, camera: CameraSettings, agent_radius: float, agent_height: float) -> None:
+    def _setup(self, scene: Scene, camera: CameraSettings, agent_radius: float, agent_height: float,
+               cull_min: int) -> None:
         import moderngl
 
         ctx = self._ctx
-        progs = [ctx.program(vertex_shader=_source(_VERTEX, m), fragment_shader=_source(_FRAGMENT, m))
-                 for m in range(3)]
+        progs = [ctx.program(vertex_shader=_source(_VERTEX, m, self._extension),
+                             fragment_shader=_source(_FRAGMENT, m)) for m in range(3)]
         far = far_plane(camera)
         for prog in progs:
-            prog["View"].binding = 0
+            if not self.one_pass:
+                prog["View"].binding = 0
             prog["u_clip"].value = ((far + NEAR_M) / (far - NEAR_M), -2.0 * far * NEAR_M / (far - NEAR_M))
             prog["u_focal"].value = focal_scales(camera)
             prog["u_inv_max_depth"].value = 1.0 / camera.max_depth
@@ -250,7 +337,7 @@ class GLRenderer:
             if len(plain):
                 c, col = surf.corners[plain], lit[plain]
                 self._batches.append(_Batch(ctx, progs[0], c, lambda o, c=c, col=col: _plain_records(c[o], col[o]),
-                                            ("3f 4f1", "in_pos", "in_color"), camera, closed))
+                                            ("3f 4f1", "in_pos", "in_color"), camera, closed, cull_min))
         textured = np.nonzero(~untextured)[0]
         if len(textured):
             layers = np.stack(surf.textures)
@@ -262,7 +349,7 @@ class GLRenderer:
             c, col, uv, lay = (a[textured] for a in (surf.corners, lit, surf.uvs, surf.layer))
             self._batches.append(_Batch(ctx, progs[1], c, lambda o: _textured_records(c[o], col[o], uv[o], lay[o]),
                                         ("3f 4f1 2f 1f", "in_pos", "in_color", "in_uv", "in_layer"), camera,
-                                        closed=False))
+                                        closed=False, cull_min=cull_min))
         progs[2]["u_scale"].value = (agent_radius, agent_radius, agent_height)
         cylinder = _cylinder()
         self._cyl_vbo = ctx.buffer(cylinder.tobytes())
@@ -272,7 +359,8 @@ class GLRenderer:
 
     # ---------------------------------------------------------------- per-team buffers
     def _ensure_capacity(self, n: int) -> None:
-        """Uniform buffer (one record per view) and instance buffer (one per agent) for at least n agents."""
+        """Per-view and per-agent buffers for at least n agents: one-pass, the view records and (viewer, other
+        agent) records; per view, the uniform buffer (one record per view) and the instance buffer."""
         if n <= self._capacity:
             return
         ctx = self._ctx
@@ -280,14 +368,25 @@ class GLRenderer:
             if obj is not None:
                 obj.release()
         self._capacity = max(n, 2 * self._capacity)
-        self._ubo = ctx.buffer(reserve=self._stride * self._capacity, dynamic=True)
-        self._inst = ctx.buffer(reserve=24 * self._capacity, dynamic=True)
+        cap = self._capacity
+        if self.one_pass:
+            self._ubo = ctx.buffer(reserve=_VIEW_RECORD.itemsize * cap, dynamic=True)
+            self._inst = ctx.buffer(reserve=_PAIR_RECORD.itemsize * max(1, cap * (cap - 1)), dynamic=True)
+            for batch in self._batches:
+                batch.bind_views(self._ubo)
+            self._agent_vao = ctx.vertex_array(self._progs[2], [
+                (self._cyl_vbo, "3f 1f", "in_pos", "in_shade"),
+                (self._inst, "3f 3f 3f 3f 3f 1i/i", "in_offset", "in_tint", *_VIEW_FORMAT[1:])])
+            self._colors = agent_colors(cap).astype(np.float32)
+            return
+        self._ubo = ctx.buffer(reserve=self._stride * cap, dynamic=True)
+        self._inst = ctx.buffer(reserve=24 * cap, dynamic=True)
         self._agent_vao = ctx.vertex_array(self._progs[2], [(self._cyl_vbo, "3f 1f", "in_pos", "in_shade"),
                                                             (self._inst, "3f 3f/i", "in_offset", "in_tint")])
-        self._views = np.zeros((self._capacity, self._stride // 4), dtype=np.float32)
-        self._views.view(np.int32)[:, 12] = np.arange(self._capacity)  # u_self: the viewing agent's index
-        self._agents = np.zeros((self._capacity, 6), dtype=np.float32)
-        self._agents[:, 3:] = agent_colors(self._capacity)
+        self._views = np.zeros((cap, self._stride // 4), dtype=np.float32)
+        self._views.view(np.int32)[:, 12] = np.arange(cap)  # u_self: the viewing agent's index
+        self._agents = np.zeros((cap, 6), dtype=np.float32)
+        self._agents[:, 3:] = agent_colors(cap)
 
     def _framebuffer(self, views: int):
         """The shared framebuffer, at least `views` tiles high (made once, grown when needed)."""
@@ -303,6 +402,16 @@ class GLRenderer:
             self._fbo_views = views
         return self._fbo
 
+    def _command_buffer(self, cmds: np.ndarray):
+        """The indirect draw buffer holding `cmds` (grown when needed)."""
+        if cmds.nbytes > self._cmd_capacity:
+            if self._cmds is not None:
+                self._cmds.release()
+            self._cmd_capacity = max(cmds.nbytes, 2 * self._cmd_capacity)
+            self._cmds = self._ctx.buffer(reserve=self._cmd_capacity, dynamic=True)
+        self._cmds.write(cmds)
+        return self._cmds
+
     # ---------------------------------------------------------------- rendering
     def render(self, feet: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Render all agents' views: rgb (N,H,W,3) uint8, depth (N,H,W,1) float32 metres (see `Renderer`)."""
@@ -315,31 +424,80 @@ class GLRenderer:
             return rgb, depth
         eyes, fwd, right, _ = view_axes(feet, yaws, self.camera)
         per_pass = min(n, self._views_per_pass)
+        passes = [range(start, min(n, start + per_pass)) for start in range(0, n, per_pass)]
         with self._ctx as ctx:
             self._ensure_capacity(n)
-            views, agents = self._views, self._agents
-            views[:n, 0:3], views[:n, 4:7], views[:n, 8:11] = eyes, fwd, right
-            agents[:n, :3] = feet
-            self._ubo.write(views[:n])
-            self._inst.write(agents[:n])
             fbo = self._framebuffer(per_pass)
             fbo.use()
-            for start in range(0, n, per_pass):
-                stop = min(n, start + per_pass)
-                area = (0, 0, w, h * (stop - start))
+            draw = self._one_pass(feet, eyes, fwd, right, passes) if self.one_pass else \
+                self._per_view(feet, eyes, fwd, right)
+            for views in passes:
+                area = (0, 0, w, h * len(views))
                 fbo.clear(1.0, 1.0, 1.0, 1.0, depth=1.0, viewport=area)
-                for k, i in enumerate(range(start, stop)):
-                    ctx.viewport = (0, k * h, w, h)
-                    self._ubo.bind_to_uniform_block(0, offset=i * self._stride, size=self._stride)
-                    for batch in self._batches:
-                        batch.draw(eyes[i], fwd[i], right[i])
-                    if n > 1:
-                        _set_culling(ctx, True)  # the cylinder is closed and wound outward
-                        self._agent_vao.render(vertices=self._cyl_vertices, instances=n)
-                fbo.read_into(rgb[start:stop], viewport=area, components=3, attachment=0)
-                fbo.read_into(depth[start:stop], viewport=area, components=1, attachment=1, dtype="f4")
+                draw(ctx, views)
+                rows = slice(views.start, views.stop)
+                fbo.read_into(rgb[rows], viewport=area, components=3, attachment=0)
+                fbo.read_into(depth[rows], viewport=area, components=1, attachment=1, dtype="f4")
         depth *= np.float32(self.camera.max_depth)
         return rgb, depth
+
+    def _one_pass(self, feet, eyes, fwd, right, passes: list[range]):
+        """Upload the views and the draw commands of all passes; returns the function drawing one pass."""
+        n, per_pass, h, w = len(feet), len(passes[0]), self.camera.height, self.camera.width
+        views = np.empty(n, dtype=_VIEW_RECORD)
+        views["eye"], views["fwd"], views["right"] = eyes, fwd, right
+        views["view"] = np.arange(n) % per_pass
+        self._ubo.write(views)
+        viewer, other = np.nonzero(~np.eye(n, dtype=bool))  # viewer-major: a pass's pairs are contiguous
+        pairs = np.empty(len(viewer), dtype=_PAIR_RECORD)
+        pairs["offset"], pairs["tint"] = feet[other], self._colors[other]
+        for name in ("eye", "fwd", "right", "view"):
+            pairs[name] = views[name][viewer]
+        if len(pairs):
+            self._inst.write(pairs)
+        per_batch = [batch.commands(eyes, fwd, right, passes) for batch in self._batches]
+        cut = np.searchsorted(viewer, [p.start for p in passes] + [n])
+        agents = [np.array([[self._cyl_vertices, b - a, 0, a, 0]], dtype=np.uint32)
+                  for a, b in zip(cut[:-1], cut[1:], strict=True)]
+        blocks = [c for lists in (*per_batch, agents) for c in lists]
+        offsets = np.cumsum([0] + [len(c) for c in blocks])
+        buf = self._command_buffer(np.concatenate(blocks))
+        rects = np.zeros((per_pass, 4), dtype=np.float32)
+        rects[:, 1], rects[:, 2], rects[:, 3] = np.arange(per_pass) * h, w, h
+        vaos = [(b.vao, b.closed) for b in self._batches] + [(self._agent_vao, True)]
+
+        def draw(ctx, views: range) -> None:
+            self._set_viewports(rects[:len(views)])
+            p = passes.index(views)
+            for k, (vao, closed) in enumerate(vaos):
+                block = k * len(passes) + p
+                count = int(offsets[block + 1] - offsets[block])
+                if count and (k < len(self._batches) or n > 1):
+                    _set_culling(ctx, closed)
+                    vao.render_indirect(buf, count=count, first=int(offsets[block]))
+
+        return draw
+
+    def _per_view(self, feet, eyes, fwd, right):
+        """Upload the views; returns the function drawing one pass, view by view (one viewport each)."""
+        n, h, w = len(feet), self.camera.height, self.camera.width
+        views, agents = self._views, self._agents
+        views[:n, 0:3], views[:n, 4:7], views[:n, 8:11] = eyes, fwd, right
+        agents[:n, :3] = feet
+        self._ubo.write(views[:n])
+        self._inst.write(agents[:n])
+
+        def draw(ctx, pass_views: range) -> None:
+            for k, i in enumerate(pass_views):
+                ctx.viewport = (0, k * h, w, h)
+                self._ubo.bind_to_uniform_block(0, offset=i * self._stride, size=self._stride)
+                for batch in self._batches:
+                    batch.draw(eyes[i], fwd[i], right[i])
+                if n > 1:
+                    _set_culling(ctx, True)  # the cylinder is closed and wound outward
+                    self._agent_vao.render(vertices=self._cyl_vertices, instances=n)
+
+        return draw
 
     def self_test(self) -> None:
         """Render one view and check its output; raises GLUnavailable when the context does not render."""
