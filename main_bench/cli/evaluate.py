@@ -81,6 +81,8 @@ def evaluate(
     out: Path | None = typer.Option(None, "--out", help="Results directory (resumed if it holds this run)."),
     workers: int = typer.Option(1, "--workers", help="Worker processes (or Ray actors)."),
     renderer: str = typer.Option("auto", "--renderer", help="auto, gl or tiny."),
+    gpu: int | None = typer.Option(None, "--gpu", help="GPU index: gl renders on EGL device N, torch policies "
+                                   "get MAIN_BENCH_TORCH_DEVICE=cuda:N."),
     limit: int | None = typer.Option(None, "--limit", help="At most N episodes per split/task/agents track."),
     executor: str = typer.Option("local", "--executor", help="local or ray."),
     seed: int = typer.Option(0, "--seed", help="Evaluation seed (policy seeds derive from it and episode ids)."),
@@ -122,7 +124,12 @@ def evaluate(
         submission=SubmissionMeta(name=name, description=description, links=tuple(link), date=date,
                                   baseline=baseline),
         sandbox=not no_sandbox,
+        gpu=gpu,
     )
+    if gpu is not None and renderer != "tiny":
+        from ..sim.render.gl import check_device
+
+        check_device(gpu)  # a missing device is bad input: one line, exit 2, before any work
     bar = _Progress(enabled=not no_progress and not as_json)
     try:
         outcome = run_evaluation(settings, progress=bar)

@@ -30,7 +30,7 @@ from typing import Any
 
 from ..errors import InputError, MainBenchError, SubmissionError
 from .ipc import encode_request, recv_reply, send_parts
-from .policy_child import EXIT_OUT_OF_MEMORY
+from .policy_child import EXIT_OUT_OF_MEMORY, TORCH_DEVICE_VAR
 from .sandbox import SandboxSettings, launch, popen, signal_of_exit
 from .submission import PolicySpec, ProtocolError
 
@@ -53,6 +53,8 @@ class Limits:
     memory_mb: int = 4096
     load_seconds: float = 120.0
     threads: int = 1
+    #: torch device for the policy ("cuda:0"), given to it as TORCH_DEVICE_VAR; None: the variable is left as is.
+    torch_device: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("step_seconds", "reset_seconds", "episode_seconds", "load_seconds"):
@@ -177,11 +179,13 @@ class PolicyProcess:
             with contextlib.suppress(OSError):
                 end.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, _SOCKET_BUFFER)
                 end.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, _SOCKET_BUFFER)
-        threads = {name: str(self.limits.threads) for name in _THREAD_VARS}
+        extra_env = {name: str(self.limits.threads) for name in _THREAD_VARS}
+        if self.limits.torch_device is not None:
+            extra_env[TORCH_DEVICE_VAR] = self.limits.torch_device
         command = [sys.executable, "-m", "main_bench.evaluation.policy_child", str(child.fileno())]
         module = self.spec.target if self.spec.kind == "module" else None
         try:
-            how = launch(command, self.spec.root, module, self.sandbox, self.limits.memory_mb, threads)
+            how = launch(command, self.spec.root, module, self.sandbox, self.limits.memory_mb, extra_env)
             proc = popen(how, (child.fileno(),), _stdout_target())
         finally:
             child.close()

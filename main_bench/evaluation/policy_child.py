@@ -20,6 +20,10 @@ from typing import Any
 
 from .ipc import recv_request, send_reply
 
+#: Environment variable naming the torch device a policy should run on ("cpu" when unset; `evaluate --gpu N`
+#: sets "cuda:N"); the shipped comm baseline follows it, other submissions may.
+TORCH_DEVICE_VAR = "MAIN_BENCH_TORCH_DEVICE"
+
 #: Exit code of a policy process that ran out of memory while reporting an error.
 EXIT_OUT_OF_MEMORY = 86
 _TEXT_LIMIT = 400
@@ -47,12 +51,14 @@ def main(argv: list[str]) -> int:
 
 
 def _limit_memory(memory_mb: int) -> None:
-    # Soft and hard limit alike, so the policy cannot raise its own limit.
+    # Soft and hard limit alike, so the policy cannot raise its own limit. A CUDA policy reserves far more
+    # address space than it uses, so there the limit is on data (writable private memory) instead.
+    which = resource.RLIMIT_DATA if os.environ.get(TORCH_DEVICE_VAR, "").startswith("cuda") else resource.RLIMIT_AS
     limit = int(memory_mb) * 1024 * 1024
-    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+    _, hard = resource.getrlimit(which)
     if hard != resource.RLIM_INFINITY:
         limit = min(limit, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    resource.setrlimit(which, (limit, limit))
 
 
 def _die_with_parent() -> None:

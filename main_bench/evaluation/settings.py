@@ -56,6 +56,8 @@ class EvalSettings:
 
     `limit`: at most this many episodes per (task, agents) track, the first by episode id. `chunk_size`:
     episodes per part file; fixed chunks make a run resumable and its files independent of `workers`.
+    `gpu`: device index for the gl renderer (EGL device) and for torch policies (`cuda:gpu`, given to the
+    policy process as MAIN_BENCH_TORCH_DEVICE); None: EGL's default display and the policy's own choice.
     `max_consecutive_failures`: policy failures in a row after which evaluation stops (PolicyFailure).
     `sandbox`: run submitted policies in the bubblewrap sandbox (`sandbox.py`); False is `--no-sandbox`.
     """
@@ -78,10 +80,13 @@ class EvalSettings:
     limits: PolicyLimits = field(default_factory=PolicyLimits)
     submission: SubmissionMeta = field(default_factory=SubmissionMeta)
     sandbox: bool = True
+    gpu: int | None = None
 
     def __post_init__(self) -> None:
         if self.workers < 1:
             raise InputError(f"--workers must be at least 1, got {self.workers}")
+        if self.gpu is not None and not (isinstance(self.gpu, int) and self.gpu >= 0):
+            raise InputError(f"--gpu must be a device index 0, 1, ..., got {self.gpu!r}")
         if self.renderer not in RENDERERS:
             raise InputError(f"--renderer must be one of {', '.join(RENDERERS)}, got {self.renderer!r}")
         if self.executor not in EXECUTORS:
@@ -125,6 +130,7 @@ class EvalSettings:
             "out": str(self.out),
             "workers": self.workers,
             "executor": self.executor,
+            "gpu": self.gpu,
             "max_consecutive_failures": self.max_consecutive_failures,
             "limits": asdict(self.limits),
         }

@@ -27,16 +27,16 @@ def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
     return TaskRules(task=task, success_distance=float(manifest.success_distance), max_steps=max_steps_of(manifest))
 
 
-def sim_settings_from_manifest(manifest: Any, renderer: str) -> Any:
+def sim_settings_from_manifest(manifest: Any, renderer: str, gpu: int | None = None) -> Any:
     """`SimSettings` with the data set's agent body (radius, height, max climb), actions and camera, and the
-    chosen renderer."""
+    chosen renderer (on EGL device `gpu`, None: the default display)."""
     from ..sim.settings import CameraSettings, SimSettings
 
     gen = manifest.settings
     camera = CameraSettings(width=int(gen.camera_width), height=int(gen.camera_height),
                             hfov_deg=float(gen.camera_hfov_deg), height_m=float(gen.camera_height_m),
                             max_depth=float(gen.max_depth))
-    return SimSettings.for_agent_body(manifest.navmesh(), renderer=renderer, camera=camera,
+    return SimSettings.for_agent_body(manifest.navmesh(), renderer=renderer, gpu=gpu, camera=camera,
                                       forward_step=float(gen.forward_step),
                                       turn_angle_deg=float(gen.turn_angle_deg))
 

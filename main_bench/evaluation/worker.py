@@ -54,7 +54,8 @@ class _IsolatedPolicy:
         from .submission import parse_spec
 
         limits = Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
-                        memory_mb=settings.limits.memory_mb)
+                        memory_mb=settings.limits.memory_mb,
+                        torch_device=None if settings.gpu is None else f"cuda:{settings.gpu}")
         sandbox = evaluation_sandbox(settings, manifest)
         self._proc = PolicyProcess(parse_spec(settings.agent), limits, settings.seed, sandbox)
 
@@ -86,7 +87,7 @@ class WorkerContext:
 
         self.settings = settings
         self.manifest = read_manifest(settings.episodes)
-        self.sim_settings = sim_settings_from_manifest(self.manifest, settings.renderer)
+        self.sim_settings = sim_settings_from_manifest(self.manifest, settings.renderer, gpu=settings.gpu)
         self._episodes: dict[tuple[str, int], dict[str, Episode]] = {}
         self.resources = EpisodeResources(self.manifest, self.sim_settings, settings.cache_dir, settings.seed)
         self._policy: Any = None

@@ -56,7 +56,8 @@ class SimSettings:
     """Agent body and actions. Lengths in metres, angles in degrees.
 
     `actuation_noise` is the standard deviation of multiplicative noise on the forward distance and on the turn
-    angle (0.1 = 10%), drawn from the simulator's seeded generator. `renderer` is auto, gl or tiny.
+    angle (0.1 = 10%), drawn from the simulator's seeded generator. `renderer` is auto, gl or tiny. `gpu`: the
+    EGL device the gl renderer runs on (index as EGL lists its devices), None: EGL's default display.
     """
 
     agent_radius: float = 0.18
@@ -67,6 +68,7 @@ class SimSettings:
     actuation_noise: float = 0.0
     camera: CameraSettings = field(default_factory=CameraSettings)
     renderer: str = "auto"
+    gpu: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("agent_radius", "agent_height", "forward_step", "turn_angle_deg"):
@@ -77,6 +79,8 @@ class SimSettings:
             raise InputError(f"invalid actuation_noise={self.actuation_noise!r}; give a fraction in [0, 1]")
         if self.renderer not in RENDERER_KINDS:
             raise InputError(f"invalid renderer {self.renderer!r}; use one of {', '.join(RENDERER_KINDS)}")
+        if self.gpu is not None and not (isinstance(self.gpu, int) and self.gpu >= 0):
+            raise InputError(f"invalid gpu={self.gpu!r}; give an EGL device index (0, 1, ...) or None")
         if not isinstance(self.camera, CameraSettings):
             raise InputError(f"invalid camera {self.camera!r}; give a CameraSettings")
         if self.camera.height_m > self.agent_height:

@@ -77,7 +77,7 @@ class Simulator:
         if self._renderer is None:
             s = self.settings
             self._renderer = make_renderer(s.renderer, self.scene, s.camera, agent_radius=s.agent_radius,
-                                           agent_height=s.agent_height)
+                                           agent_height=s.agent_height, gpu=s.gpu)
         return self._renderer
 
     @property

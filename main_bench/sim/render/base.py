@@ -76,13 +76,16 @@ def _seconds_per_frame(renderer: Renderer, scene: Scene) -> float:
 
 
 def make_renderer(kind: str, scene: Scene, camera: CameraSettings, *, agent_radius: float = 0.18,
-                  agent_height: float = 1.5) -> Renderer:
+                  agent_height: float = 1.5, gpu: int | None = None) -> Renderer:
     """Create a renderer for `scene`. kind: "gl" (moderngl through EGL), "tiny" (pybullet's CPU renderer), or
     "auto": the fastest that works, `renderer.reason` says why. gl on a GPU or on llvmpipe is taken when its
     context renders correctly (measured many times faster than tiny); gl on another software rasteriser
     (SLOW_GL_DEVICES) is timed against tiny on a few frames and the faster kept; no gl: tiny.
 
-    Raises InputError for an unknown kind, or when "gl" is asked for and no context can be created.
+    `gpu`: the EGL device index gl renders on (None: EGL's default display); tiny ignores it.
+
+    Raises InputError for an unknown kind, when "gl" is asked for and no context can be created, or when
+    `gpu` names an EGL device that does not exist (for "auto" too: a device asked for is never replaced).
     """
     if kind not in RENDERER_KINDS:
         raise InputError(f"unknown renderer {kind!r}; use one of {', '.join(RENDERER_KINDS)}")
@@ -94,14 +97,18 @@ def make_renderer(kind: str, scene: Scene, camera: CameraSettings, *, agent_radi
         return TinyRenderer(scene, camera, reason="requested", **shape)
     if kind == "gl":
         try:
-            return gl.GLRenderer(scene, camera, reason="requested", **shape)
+            return gl.GLRenderer(scene, camera, reason="requested", device_index=gpu, **shape)
+        except gl.GLDeviceMissing as exc:
+            raise InputError(gl.missing_device_message(gpu, exc)) from None
         except gl.GLUnavailable as exc:
             raise InputError(f"renderer gl is not available here: {exc}; install libegl1 and libgl1-mesa-dri "
                              "(Mesa) or a GPU driver with EGL, or use --renderer tiny") from None
     try:
         renderer = gl.GLRenderer(scene, camera, reason="auto: headless OpenGL context works (fastest backend)",
-                                 **shape)
+                                 device_index=gpu, **shape)
         renderer.self_test()
+    except gl.GLDeviceMissing as exc:
+        raise InputError(gl.missing_device_message(gpu, exc)) from None
     except gl.GLUnavailable as exc:
         log.warning("renderer auto -> tiny: OpenGL through EGL unavailable (%s)", exc)
         return TinyRenderer(scene, camera, reason=f"auto: OpenGL through EGL unavailable ({exc})", **shape)

@@ -254,6 +254,43 @@ class GLDeviceMissing(GLUnavailable):
     """The EGL device asked for (`device_index`) does not exist on this machine."""
 
 
+def _context(device_index: int | None):
+    """A standalone moderngl context through EGL, on device `device_index` (None: the default display)."""
+    try:
+        import moderngl
+
+        extra = {} if device_index is None else {"device_index": int(device_index)}
+        return moderngl.create_standalone_context(backend="egl", **extra)
+    except Exception as exc:  # missing libEGL, no driver, no device: all mean "no gl here"
+        if device_index is not None and "device index" in str(exc):
+            raise GLDeviceMissing(str(exc)) from None
+        raise GLUnavailable(f"{type(exc).__name__}: {exc}") from None
+
+
+def missing_device_message(index: int | None, exc: Exception) -> str:
+    """The one-line error for `--gpu index` when EGL has no such device."""
+    return (f"--gpu {index}: no such EGL device ({exc}); give an index below that count (0 is the first GPU), "
+            "or leave --gpu out for EGL's default display")
+
+
+def check_device(index: int) -> str:
+    """The GL_RENDERER name of EGL device `index`; raises InputError when it does not exist or gives no
+    OpenGL context."""
+    from ...errors import InputError
+
+    try:
+        ctx = _context(index)
+    except GLDeviceMissing as exc:
+        raise InputError(missing_device_message(index, exc)) from None
+    except GLUnavailable as exc:
+        raise InputError(f"--gpu {index}: no OpenGL context through EGL here ({exc}); install the GPU's driver "
+                         "with EGL, or leave --gpu out") from None
+    try:
+        return str(ctx.info.get("GL_RENDERER", "unknown"))
+    finally:
+        ctx.release()
+
+
 class GLRenderer:
     """Batched egocentric RGB-D renderer on moderngl + EGL (see the module docstring).
 
@@ -269,15 +306,7 @@ class GLRenderer:
     def __init__(self, scene: Scene, camera: CameraSettings, *, reason: str = "requested",
                  agent_radius: float = 0.18, agent_height: float = 1.5, device_index: int | None = None,
                  one_pass: bool | None = None, cull_min_triangles: int = CULL_MIN_TRIANGLES) -> None:
-        try:
-            import moderngl
-
-            extra = {} if device_index is None else {"device_index": int(device_index)}
-            self._ctx = moderngl.create_standalone_context(backend="egl", **extra)
-        except Exception as exc:  # missing libEGL, no driver, no device: all mean "no gl here"
-            if device_index is not None and "device index" in str(exc):
-                raise GLDeviceMissing(str(exc)) from None
-            raise GLUnavailable(f"{type(exc).__name__}: {exc}") from None
+        self._ctx = _context(device_index)
         self.reason = reason
         self.camera = camera
         self.device_index = device_index

@@ -18,6 +18,7 @@ run is deterministic for a given evaluation seed.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -105,8 +106,10 @@ class CommTeamPolicy:
         prev = torch.tensor([self._prev.get(a, NUM_ACTIONS) for a in ids], dtype=torch.long)
         inbox = torch.stack([self._inbox(a, ids) for a in ids])
         hidden = torch.stack([self._hidden.get(a, torch.zeros(HIDDEN)) for a in ids])
-        logits, message, hidden = self.net(rgbd, torch.stack(target), torch.tensor(is_point), contact, prev,
-                                           inbox, hidden)
+        inputs = (rgbd, torch.stack(target), torch.tensor(is_point), contact, prev, inbox, hidden)
+        device = next(self.net.parameters()).device
+        # Forward pass on the net's device; state and sampling stay on the CPU (seeded CPU generator).
+        logits, message, hidden = (t.cpu() for t in self.net(*(t.to(device) for t in inputs)))
         chosen = torch.multinomial(torch.softmax(logits, dim=1), 1, generator=self._gen)[:, 0]
         out = {}
         for k, a in enumerate(ids):
@@ -135,14 +138,28 @@ def _target(target: Any) -> tuple[torch.Tensor, bool]:
     return torch.tensor([float(arr[0]), 0.0, 0.0]), False
 
 
+def torch_device() -> torch.device:
+    """The device named by MAIN_BENCH_TORCH_DEVICE (set by `evaluate --gpu N`), CPU when unset; raises
+    RuntimeError when it names a CUDA device this process cannot use."""
+    name = os.environ.get("MAIN_BENCH_TORCH_DEVICE", "") or "cpu"
+    device = torch.device(name)
+    if device.type == "cuda":
+        count = torch.cuda.device_count() if torch.cuda.is_available() else 0
+        if (device.index or 0) >= count:
+            raise RuntimeError(f"MAIN_BENCH_TORCH_DEVICE={name}: this torch sees {count} CUDA device(s) "
+                               f"(torch {torch.__version__}); give one of them or cpu")
+    return device
+
+
 def make_policy(root: Path, seed: int = 0) -> CommTeamPolicy:
-    """Build the team policy from `root/weights.pt` (the isolated policy process calls this)."""
+    """Build the team policy from `root/weights.pt` (the isolated policy process calls this), on the device
+    `torch_device()` names."""
     path = Path(root) / WEIGHTS_FILE
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no weights; write them with write_untrained_weights or train the model")
     net = CommNet()
     net.load_state_dict(torch.load(path, map_location="cpu", weights_only=True))
-    return CommTeamPolicy(net, seed)
+    return CommTeamPolicy(net.to(torch_device()), seed)
 
 
 if __name__ == "__main__":
