@@ -11,6 +11,10 @@ then one readback per attachment. No view culling, no batching of views.
 
 from __future__ import annotations
 
+import statistics
+import time
+from typing import Any
+
 import numpy as np
 
 from ..scenes.loader import Scene
@@ -143,3 +147,49 @@ class BareGLLoop:
     def close(self) -> None:
         """Release the context."""
         self.ctx.release()
+
+
+#: Goals of issue 10: the simulator's render time over the bare loop's, per scene kind.
+GOAL_RATIO_BUILTIN = 1.15
+GOAL_RATIO_LARGE = 1.0
+
+
+def time_render_vs_bare(sim: Any, starts: np.ndarray, yaws: np.ndarray, actions: list[list[int]],
+                        repeats: int) -> dict[str, Any]:
+    """Time `sim.observe()` (gl) against `BareGLLoop.render` on the same poses: the simulator walks `actions`
+    from the start poses, and after each team step both render its poses (the order alternates between
+    repeats), in this process. Figures: medians over repeats of ms per team step, and the ratio."""
+    from ..sim.render.gl import GLRenderer
+
+    renderer = sim.renderer
+    if not isinstance(renderer, GLRenderer):
+        return {"error": f"the simulator's renderer is {renderer.name}, not gl"}
+    bare = BareGLLoop(sim.scene, renderer.camera, agent_radius=sim.settings.agent_radius,
+                      agent_height=sim.settings.agent_height)
+    runs: list[tuple[float, float]] = []
+    try:
+        for rep in range(repeats + 1):  # the first is a warm-up
+            sim.reset(starts, yaws)
+            t_sim = t_bare = 0.0
+            for a in actions:
+                sim.step(a)
+                feet, yaw = sim.positions, sim.yaws
+                for first in ((True, False) if rep % 2 else (False, True)):
+                    t = time.perf_counter()
+                    if first:
+                        sim.observe()
+                        t_sim += time.perf_counter() - t
+                    else:
+                        bare.render(feet, yaw)
+                        t_bare += time.perf_counter() - t
+            if rep:
+                runs.append((t_sim / len(actions) * 1e3, t_bare / len(actions) * 1e3))
+    finally:
+        bare.close()
+    sim_ms, bare_ms = (statistics.median(r[k] for r in runs) for k in (0, 1))
+    return {"sim_render_ms_per_team_step": round(sim_ms, 3), "bare_loop_ms_per_team_step": round(bare_ms, 3),
+            "sim_over_bare": round(sim_ms / bare_ms, 3),
+            "sim_over_bare_runs": [round(s / b, 3) for s, b in runs],
+            "one_pass": renderer.one_pass, "culled_batches": sum(b.culler is not None for b in renderer._batches),
+            "batches": len(renderer._batches), "team_steps_per_repeat": len(actions), "repeats": repeats,
+            "device": renderer.device}

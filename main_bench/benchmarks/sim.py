@@ -2,7 +2,8 @@
 
 One agent-step = one agent's action resolved (collisions included) plus its RGB-D observation rendered: a
 team step is `Simulator.step` (all agents) and `Simulator.observe` (all agents' views), counted as 3
-agent-steps. Scenes: the built-in house `house_0000` (always), and in the full run the two-storey
+agent-steps. The gl simulator's render is also timed against a bare moderngl loop over the same mesh and
+poses (`bare_gl`), side by side with alternating order, and their ratio reported with its goal. Scenes: the built-in house `house_0000` (always), and in the full run the two-storey
 `house_0001`, the synthetic `box_house` and, when the shared real scenes are found (MAIN_BENCH_REAL_SCENES
 or ../shared/scenes), the 146k-triangle furnished AWS house.
 
@@ -28,6 +29,7 @@ from ..scenes.loader import Scene, load_scene
 from ..sim import SimSettings, Simulator
 from ..sim.synthetic import box_house
 from . import machine_done, machine_info, real_scenes_folder
+from .bare_gl import GOAL_RATIO_BUILTIN, GOAL_RATIO_LARGE, time_render_vs_bare
 
 AGENTS = 3
 BACKENDS = ("gl", "tiny")
@@ -90,13 +92,35 @@ def _summary(runs: list[dict], sim: Simulator, steps: int) -> dict:
     }
 
 
+def _workload(steps: int) -> tuple[np.ndarray, list[list[int]]]:
+    """The seeded start yaws and `steps` team steps of random actions every timing here uses."""
+    rng = np.random.default_rng(0)
+    yaws = rng.uniform(-np.pi, np.pi, AGENTS)
+    return yaws, rng.choice([1, 1, 1, 2, 3], size=(steps, AGENTS)).tolist()
+
+
+def render_vs_bare(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, repeats: int) -> dict:
+    """The gl simulator's render against the bare moderngl loop (`bare_gl`) on the same poses, with its goal:
+    at most GOAL_RATIO_LARGE times the bare loop on scenes of 100k triangles or more, else GOAL_RATIO_BUILTIN."""
+    yaws, actions = _workload(steps)
+    goal = GOAL_RATIO_LARGE if scene.triangle_count >= 100_000 else GOAL_RATIO_BUILTIN
+    try:
+        sim = Simulator(scene, navmesh, SimSettings(renderer="gl"), seed=0)
+    except Exception as exc:  # no gl here: reported, not fatal
+        return {"error": f"{type(exc).__name__}: {exc}"}
+    with sim:
+        out = time_render_vs_bare(sim, starts, yaws, actions, repeats)
+    if "sim_over_bare" in out:
+        out["goal_sim_over_bare"] = goal
+        out["meets_goal"] = out["sim_over_bare"] <= goal
+    return out
+
+
 def time_backends(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, repeats: int,
                   backends: Sequence[str] = BACKENDS) -> dict[str, dict]:
     """Time each backend on `steps` team steps (tiny: a quarter, at least 20), `repeats` interleaved runs;
     a backend that cannot start here is reported as {"error": ...}."""
-    rng = np.random.default_rng(0)
-    yaws = rng.uniform(-np.pi, np.pi, AGENTS)
-    actions = rng.choice([1, 1, 1, 2, 3], size=(steps, AGENTS)).tolist()
+    yaws, actions = _workload(steps)
     sims: dict[str, Simulator] = {}
     out: dict[str, dict] = {}
     runs: dict[str, list[dict]] = {}
@@ -147,6 +171,7 @@ def run(quick: bool = False, *, steps: int | None = None, repeats: int | None = 
                                    "repeats": repeats}
             row.update(time_backends(scene, nm, starts, steps, repeats))
             _verdict(row)
+            row["render_vs_bare"] = render_vs_bare(scene, nm, starts, steps, repeats)
             results.append(row)
     return {
         "benchmark": "sim",
@@ -168,4 +193,13 @@ def summary_lines(result: dict) -> list[str]:
         lines.append(f"{row['scene']} ({row['triangles']} triangles, medians of {row['repeats']}): "
                      + ", ".join(f"{k} {v} agent-steps/s" for k, v in rates.items())
                      + f"; gl/tiny {row.get('gl_over_tiny')}; gl on {row['gl'].get('device')}")
+        cmp = row.get("render_vs_bare", {})
+        if "sim_over_bare" in cmp:
+            lines.append(f"  render per team step: simulator {cmp['sim_render_ms_per_team_step']} ms, bare moderngl "
+                         f"loop {cmp['bare_loop_ms_per_team_step']} ms, ratio {cmp['sim_over_bare']} (goal <= "
+                         f"{cmp['goal_sim_over_bare']}: {'met' if cmp['meets_goal'] else 'NOT met'}; "
+                         f"{'one pass' if cmp['one_pass'] else 'pass per view'}, {cmp['culled_batches']} of "
+                         f"{cmp['batches']} batches culled)")
+        elif cmp:
+            lines.append(f"  render vs bare loop: {cmp.get('error')}")
     return lines

@@ -34,3 +34,37 @@ def test_time_backends_reports_every_backend_side_by_side():
     assert len(lines) == 2 and f"gl {out['gl']['agent_steps_per_s']} agent-steps/s" in lines[1]
     broken = bench.time_backends(room(), None, starts, steps=2, repeats=1, backends=("tiny", "vulkan"))
     assert "agent_steps_per_s" in broken["tiny"] and "vulkan" in broken["vulkan"]["error"]
+
+
+def test_render_vs_bare_loop_times_both_on_the_same_poses_and_the_bare_loop_sees_the_same_scene():
+    from main_bench.benchmarks.bare_gl import BareGLLoop
+    from main_bench.sim.render.gl import GLRenderer, GLUnavailable
+    from main_bench.sim.synthetic import box_house
+
+    scene = box_house(0)
+    try:
+        GLRenderer(scene, CameraSettings()).close()
+    except GLUnavailable:
+        need(False, "gl renderer needs EGL + Mesa (apt-get install libegl1 libgl1-mesa-dri) or a GPU driver")
+    starts = np.array([[1.0, 1.0, 0.0], [3.0, 2.0, 0.0], [5.0, 3.0, 0.0]])
+    out = bench.render_vs_bare(scene, None, starts, steps=3, repeats=2)
+    assert out["sim_render_ms_per_team_step"] > 0 and out["bare_loop_ms_per_team_step"] > 0
+    ratio = out["sim_render_ms_per_team_step"] / out["bare_loop_ms_per_team_step"]
+    assert abs(out["sim_over_bare"] - ratio) < 0.01 * ratio
+    assert len(out["sim_over_bare_runs"]) == 2 and out["goal_sim_over_bare"] == 1.15
+    assert out["meets_goal"] == (out["sim_over_bare"] <= 1.15)
+    row = {"scene": "box", "triangles": 1, "repeats": 2, "gl": {"agent_steps_per_s": 1.0},
+           "tiny": {"agent_steps_per_s": 1.0}, "render_vs_bare": out}
+    lines = bench.summary_lines({"machine": {"cpus": 2, "platform": "t", "load_average_1min_at_start": 1.0,
+                                             "load_average_1min_at_end": 1.0}, "results": [row]})
+    assert f"ratio {out['sim_over_bare']}" in lines[2]
+    # The bare loop draws the same scene from the same poses: the same depth wherever no agent is in view.
+    cam = CameraSettings()
+    bare, sim = BareGLLoop(scene, cam), GLRenderer(scene, cam)
+    try:
+        (_, d_bare), (_, d_sim) = bare.render(starts[:1], np.zeros(1)), sim.render(starts[:1], np.zeros(1))
+    finally:
+        bare.close()
+        sim.close()
+    assert (d_sim < cam.max_depth).mean() > 0.3
+    assert (np.abs(d_bare - d_sim) <= 1e-3 * d_sim).mean() > 0.99
