@@ -1,18 +1,24 @@
-"""The `gl` backend: OpenGL 3.3 through EGL with no display (moderngl), on a GPU or on Mesa's llvmpipe.
+"""The `gl` backend: OpenGL through EGL with no display (moderngl), on a GPU or on Mesa's llvmpipe.
 
-One render pass serves every agent: the views are stacked in one framebuffer (view k of a batch is the tile
-rows [k*H, (k+1)*H), so the readback is already (N, H, W, C) and needs no transpose), and one readback per
-attachment returns all of them, straight into the output arrays. The framebuffer, the per-view uniform
-buffer and the agents' instance buffer are made once and reused; a step allocates only its output arrays.
+All views of a call share one framebuffer (view k of a batch is the tile rows [k*H, (k+1)*H), so the readback
+is already (N, H, W, C) and needs no transpose), and one readback per attachment returns all of them, straight
+into the output arrays. The views are drawn either in one pass (OpenGL 4.3 with a vertex shader that picks the
+viewport, `viewports`): the poses go up once as per-view instance records and each batch of faces is one
+indirect multi-draw with a command per view (or per visible cell run), the viewport index chosen in the vertex
+shader; or view by view (OpenGL 3.3): the view's record bound from a uniform buffer and its viewport set. The
+two give the same images (`tests/sim/test_gl_passes.py`); on llvmpipe the pass per view is the faster and the
+default (docs/evaluation.md). The framebuffer and the per-view buffers are made once and reused; a step
+allocates only its output arrays and, in one pass, its small command list.
 
 The scene is baked once: unindexed triangles deduplicated into an indexed vertex buffer, ordered by grid cell
-for culling (`culling.CellCuller`), with a fixed two-sided directional light multiplied into the vertex colours,
-so the fragment shader of untextured surfaces only copies a colour and writes depth. Faces of closed,
-outward-wound parts (`materials.closed_outward`: the boxes of the built-in houses, for example) are drawn with
-back-face culling, which about halves the raster work there; open or inconsistent parts (most scanned and
-artist meshes) are drawn two-sided. Textured surfaces (if any) get their own buffer and program, which
-samples a texture array. Agents are one cylinder mesh drawn
-instanced (offset and tint per instance); the viewing agent's instance is dropped in the vertex shader.
+for culling (`culling.CellCuller`, used only for batches of at least CULL_MIN_TRIANGLES faces), with a fixed
+two-sided directional light multiplied into the vertex colours, so the fragment shader of untextured surfaces
+only copies a colour and writes depth. Faces of closed, outward-wound parts (`materials.closed_outward`: the
+boxes of the built-in houses, for example) are drawn with back-face culling, which about halves the raster
+work there; open or inconsistent parts (most scanned and artist meshes) are drawn two-sided. Textured
+surfaces (if any) get their own buffer and program, which samples a texture array. Agents are one cylinder
+mesh drawn instanced (offset and tint per instance); view by view, the viewing agent's instance is dropped in
+the vertex shader; in one pass, the instances are the (viewer, other agent) pairs.
 Linear z-depth goes to a float attachment (depth / max_depth), so no depth-buffer conversion is needed and
 precision does not depend on the near/far ratio.
 """
