@@ -40,11 +40,22 @@ def machine_done(machine: dict[str, Any]) -> dict[str, Any]:
 
 
 def tool_main(description: str, quick_help: str, run: Callable[..., dict[str, Any]],
-              render: Callable[[dict[str, Any]], str]) -> None:
-    """Command line of a `tools/bench_*.py` script: `--quick` for a smoke run, `--json` for the full result."""
+              render: Callable[[dict[str, Any]], str], gpu_option: bool = False) -> None:
+    """Command line of a `tools/bench_*.py` script: `--quick` for a smoke run, `--json` for the full result,
+    and with `gpu_option` `--gpu N` (passed to `run` as gpu=N). Bad input: one line on stderr, exit 2."""
+    import sys
+
+    from ..errors import MainBenchError
+
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--json", action="store_true", help="print the full result as JSON")
     parser.add_argument("--quick", action="store_true", help=quick_help)
+    if gpu_option:
+        parser.add_argument("--gpu", type=int, default=None, help="render on EGL device N (default: EGL's default)")
     args = parser.parse_args()
-    result = run(quick=args.quick)
+    try:
+        result = run(quick=args.quick, **({"gpu": args.gpu} if gpu_option else {}))
+    except MainBenchError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
     print(json.dumps(result, indent=2) if args.json else render(result))

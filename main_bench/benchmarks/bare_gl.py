@@ -69,13 +69,13 @@ class BareGLLoop:
     """The bare loop (see the module docstring) on its own EGL context."""
 
     def __init__(self, scene: Scene, camera: CameraSettings, *, agent_radius: float = 0.18,
-                 agent_height: float = 1.5) -> None:
+                 agent_height: float = 1.5, device_index: int | None = None) -> None:
         import moderngl
 
-        from ..sim.render.gl import _cylinder, _indexed, _plain_records
+        from ..sim.render.gl import _context, _cylinder, _indexed, _plain_records
 
         self.camera = camera
-        self.ctx = ctx = moderngl.create_standalone_context(backend="egl")
+        self.ctx = ctx = _context(device_index)
         self.prog = ctx.program(vertex_shader=_VERTEX, fragment_shader=_FRAGMENT)
         self.prog["u_inv_max_depth"].value = 1.0 / camera.max_depth
         self.origin = ctx.buffer(np.zeros(3, dtype=np.float32).tobytes())
@@ -155,17 +155,18 @@ GOAL_RATIO_LARGE = 1.0
 
 
 def time_render_vs_bare(sim: Any, starts: np.ndarray, yaws: np.ndarray, actions: list[list[int]],
-                        repeats: int) -> dict[str, Any]:
-    """Time `sim.observe()` (gl) against `BareGLLoop.render` on the same poses: the simulator walks `actions`
-    from the start poses, and after each team step both render its poses (the order alternates between
-    repeats), in this process. Figures: medians over repeats of ms per team step, and the ratio."""
+                        repeats: int, gpu: int | None = None) -> dict[str, Any]:
+    """Time `sim.observe()` (gl) against `BareGLLoop.render` (on EGL device `gpu`) on the same poses: the
+    simulator walks `actions` from the start poses, and after each team step both render its poses (the order
+    alternates between repeats), in this process. Figures: medians over repeats of ms per team step, their
+    ratio, and the simulator's RGB-D frames (views) per second."""
     from ..sim.render.gl import GLRenderer
 
     renderer = sim.renderer
     if not isinstance(renderer, GLRenderer):
         return {"error": f"the simulator's renderer is {renderer.name}, not gl"}
     bare = BareGLLoop(sim.scene, renderer.camera, agent_radius=sim.settings.agent_radius,
-                      agent_height=sim.settings.agent_height)
+                      agent_height=sim.settings.agent_height, device_index=gpu)
     runs: list[tuple[float, float]] = []
     try:
         for rep in range(repeats + 1):  # the first is a warm-up
@@ -189,6 +190,7 @@ def time_render_vs_bare(sim: Any, starts: np.ndarray, yaws: np.ndarray, actions:
     sim_ms, bare_ms = (statistics.median(r[k] for r in runs) for k in (0, 1))
     return {"sim_render_ms_per_team_step": round(sim_ms, 3), "bare_loop_ms_per_team_step": round(bare_ms, 3),
             "sim_over_bare": round(sim_ms / bare_ms, 3),
+            "sim_rgbd_frames_per_s": round(len(starts) * 1e3 / sim_ms, 1),
             "sim_over_bare_runs": [round(s / b, 3) for s, b in runs],
             "one_pass": renderer.one_pass, "culled_batches": sum(b.culler is not None for b in renderer._batches),
             "batches": len(renderer._batches), "team_steps_per_repeat": len(actions), "repeats": repeats,

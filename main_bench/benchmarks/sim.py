@@ -99,17 +99,19 @@ def _workload(steps: int) -> tuple[np.ndarray, list[list[int]]]:
     return yaws, rng.choice([1, 1, 1, 2, 3], size=(steps, AGENTS)).tolist()
 
 
-def render_vs_bare(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, repeats: int) -> dict:
+def render_vs_bare(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, repeats: int,
+                   gpu: int | None = None) -> dict:
     """The gl simulator's render against the bare moderngl loop (`bare_gl`) on the same poses, with its goal:
     at most GOAL_RATIO_LARGE times the bare loop on scenes of 100k triangles or more, else GOAL_RATIO_BUILTIN."""
     yaws, actions = _workload(steps)
     goal = GOAL_RATIO_LARGE if scene.triangle_count >= 100_000 else GOAL_RATIO_BUILTIN
     try:
-        sim = Simulator(scene, navmesh, SimSettings(renderer="gl"), seed=0)
+        sim = Simulator(scene, navmesh, SimSettings(renderer="gl", gpu=gpu), seed=0)
+        sim.renderer  # noqa: B018 - created here, so that a missing gl is reported below
     except Exception as exc:  # no gl here: reported, not fatal
         return {"error": f"{type(exc).__name__}: {exc}"}
     with sim:
-        out = time_render_vs_bare(sim, starts, yaws, actions, repeats)
+        out = time_render_vs_bare(sim, starts, yaws, actions, repeats, gpu)
     if "sim_over_bare" in out:
         out["goal_sim_over_bare"] = goal
         out["meets_goal"] = out["sim_over_bare"] <= goal
@@ -117,7 +119,7 @@ def render_vs_bare(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, r
 
 
 def time_backends(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, repeats: int,
-                  backends: Sequence[str] = BACKENDS) -> dict[str, dict]:
+                  backends: Sequence[str] = BACKENDS, gpu: int | None = None) -> dict[str, dict]:
     """Time each backend on `steps` team steps (tiny: a quarter, at least 20), `repeats` interleaved runs;
     a backend that cannot start here is reported as {"error": ...}."""
     yaws, actions = _workload(steps)
@@ -127,7 +129,7 @@ def time_backends(scene: Scene, navmesh: Any, starts: np.ndarray, steps: int, re
     try:
         for kind in backends:
             try:
-                sim = Simulator(scene, navmesh, SimSettings(renderer=kind), seed=0)
+                sim = Simulator(scene, navmesh, SimSettings(renderer=kind, gpu=gpu), seed=0)
                 sims[kind] = sim
                 sim.reset(starts, yaws)
                 sim.observe()  # warm-up: context, buffers, first frame
@@ -158,20 +160,26 @@ def _verdict(row: dict) -> None:
         row["meets_5x_tiny"] = row["gl_over_tiny"] >= GOAL_OVER_TINY
 
 
-def run(quick: bool = False, *, steps: int | None = None, repeats: int | None = None) -> dict:
-    """Time both backends side by side on each scene; returns a JSON-ready dict (figures are medians)."""
+def run(quick: bool = False, *, steps: int | None = None, repeats: int | None = None,
+        gpu: int | None = None) -> dict:
+    """Time both backends side by side on each scene, gl on EGL device `gpu` (None: the default display);
+    returns a JSON-ready dict (figures are medians). Raises InputError when device `gpu` does not exist."""
+    if gpu is not None:
+        from ..sim.render.gl import check_device
+
+        check_device(gpu)
     steps = steps or (60 if quick else 200)
     repeats = repeats or (3 if quick else 5)
-    machine = machine_info(LP_NUM_THREADS=os.environ.get("LP_NUM_THREADS"))
+    machine = machine_info(LP_NUM_THREADS=os.environ.get("LP_NUM_THREADS"), gpu=gpu)
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, scene in _scenes(quick, Path(tmp)):
             nm, starts = _starts(scene, np.random.default_rng(1))
             row: dict[str, Any] = {"scene": name, "triangles": scene.triangle_count, "agents": AGENTS,
                                    "repeats": repeats}
-            row.update(time_backends(scene, nm, starts, steps, repeats))
+            row.update(time_backends(scene, nm, starts, steps, repeats, gpu=gpu))
             _verdict(row)
-            row["render_vs_bare"] = render_vs_bare(scene, nm, starts, steps, repeats)
+            row["render_vs_bare"] = render_vs_bare(scene, nm, starts, steps, repeats, gpu)
             results.append(row)
     return {
         "benchmark": "sim",
@@ -195,7 +203,8 @@ def summary_lines(result: dict) -> list[str]:
                      + f"; gl/tiny {row.get('gl_over_tiny')}; gl on {row['gl'].get('device')}")
         cmp = row.get("render_vs_bare", {})
         if "sim_over_bare" in cmp:
-            lines.append(f"  render per team step: simulator {cmp['sim_render_ms_per_team_step']} ms, bare moderngl "
+            lines.append(f"  render per team step: simulator {cmp['sim_render_ms_per_team_step']} ms "
+                         f"({cmp['sim_rgbd_frames_per_s']} RGB-D frames/s), bare moderngl "
                          f"loop {cmp['bare_loop_ms_per_team_step']} ms, ratio {cmp['sim_over_bare']} (goal <= "
                          f"{cmp['goal_sim_over_bare']}: {'met' if cmp['meets_goal'] else 'NOT met'}; "
                          f"{'one pass' if cmp['one_pass'] else 'pass per view'}, {cmp['culled_batches']} of "

@@ -68,3 +68,23 @@ def test_render_vs_bare_loop_times_both_on_the_same_poses_and_the_bare_loop_sees
         sim.close()
     assert (d_sim < cam.max_depth).mean() > 0.3
     assert (np.abs(d_bare - d_sim) <= 1e-3 * d_sim).mean() > 0.99
+
+
+def test_bench_sim_missing_gpu_is_one_line_and_exit_2():
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from main_bench.errors import InputError
+    from main_bench.sim.render.gl import check_device
+
+    try:
+        check_device(0)
+    except InputError:
+        need(False, "EGL device enumeration needs libEGL with a driver (Mesa or a GPU's)")
+    tool = Path(__file__).resolve().parents[2] / "tools" / "bench_sim.py"
+    res = subprocess.run([sys.executable, str(tool), "--quick", "--gpu", "99"], capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 2 and res.stdout == ""
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "--gpu 99: no such EGL device" in lines[0]
