@@ -158,8 +158,9 @@ def time_render_vs_bare(sim: Any, starts: np.ndarray, yaws: np.ndarray, actions:
                         repeats: int, gpu: int | None = None) -> dict[str, Any]:
     """Time `sim.observe()` (gl) against `BareGLLoop.render` (on EGL device `gpu`) on the same poses: the
     simulator walks `actions` from the start poses, and after each team step both render its poses (the order
-    alternates between repeats), in this process. Figures: medians over repeats of ms per team step, their
-    ratio, and the simulator's RGB-D frames (views) per second."""
+    alternates between repeats), in this process. Figures: ms per team step, the median over the team steps of
+    a repeat (robust to the pauses a loaded machine gives either), then the median over repeats; their ratio;
+    and the simulator's RGB-D frames (views) per second."""
     from ..sim.render.gl import GLRenderer
 
     renderer = sim.renderer
@@ -171,20 +172,16 @@ def time_render_vs_bare(sim: Any, starts: np.ndarray, yaws: np.ndarray, actions:
     try:
         for rep in range(repeats + 1):  # the first is a warm-up
             sim.reset(starts, yaws)
-            t_sim = t_bare = 0.0
+            times: tuple[list[float], list[float]] = ([], [])
             for a in actions:
                 sim.step(a)
                 feet, yaw = sim.positions, sim.yaws
-                for first in ((True, False) if rep % 2 else (False, True)):
+                for which in ((0, 1) if rep % 2 else (1, 0)):
                     t = time.perf_counter()
-                    if first:
-                        sim.observe()
-                        t_sim += time.perf_counter() - t
-                    else:
-                        bare.render(feet, yaw)
-                        t_bare += time.perf_counter() - t
+                    sim.observe() if which == 0 else bare.render(feet, yaw)
+                    times[which].append(time.perf_counter() - t)
             if rep:
-                runs.append((t_sim / len(actions) * 1e3, t_bare / len(actions) * 1e3))
+                runs.append((statistics.median(times[0]) * 1e3, statistics.median(times[1]) * 1e3))
     finally:
         bare.close()
     sim_ms, bare_ms = (statistics.median(r[k] for r in runs) for k in (0, 1))
