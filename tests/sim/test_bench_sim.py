@@ -49,9 +49,8 @@ def test_render_vs_bare_loop_times_both_on_the_same_poses_and_the_bare_loop_sees
     starts = np.array([[1.0, 1.0, 0.0], [3.0, 2.0, 0.0], [5.0, 3.0, 0.0]])
     out = bench.render_vs_bare(scene, None, starts, steps=3, repeats=2)
     assert out["sim_render_ms_per_team_step"] > 0 and out["bare_loop_ms_per_team_step"] > 0
-    ratio = out["sim_render_ms_per_team_step"] / out["bare_loop_ms_per_team_step"]
-    assert abs(out["sim_over_bare"] - ratio) < 0.01 * ratio
     assert len(out["sim_over_bare_runs"]) == 2 and out["goal_sim_over_bare"] == 1.15
+    assert abs(out["sim_over_bare"] - float(np.median(out["sim_over_bare_runs"]))) < 2e-3
     assert out["meets_goal"] == (out["sim_over_bare"] <= 1.15)
     row = {"scene": "box", "triangles": 1, "repeats": 2, "gl": {"agent_steps_per_s": 1.0},
            "tiny": {"agent_steps_per_s": 1.0}, "render_vs_bare": out}
