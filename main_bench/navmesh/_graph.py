@@ -56,17 +56,29 @@ def _rect_dist(px, py, r):
 @njit(cache=True)
 def blocking_rects(nbr, ix, iy, z, nx, ny, span_start, szlo, szhi, srect, x0, y0, cs, max_climb,
                    agent_height):
-    """(N, 8, 4) what stops each node's missing links, as rectangles in cell units (x0, y0, x1, y1).
+    """What stops each node's missing links, as rectangles in cell units (x0, y0, x1, y1).
 
-    The rectangle is the extent, within the neighbour column, of the geometry that blocks the agent's body
-    there (spans rising above max_climb and below agent_height): walls are located to within their true
-    position, not rounded to whole cells. Where no such geometry exists (a ledge, the grid's edge) it is the
-    neighbour's whole cell square. Rows of existing links, and of diagonals missing only because one of
-    their sides is blocked, are NaN (no obstacle).
+    Returns (row, rects): row (N,) is the node's row in rects (B, 8, 4), or -1 for a node with all its links
+    (most nodes: only those rows are stored). The rectangle is the extent, within the neighbour column, of the
+    geometry that blocks the agent's body there (spans rising above max_climb and below agent_height): walls
+    are located to within their true position, not rounded to whole cells. Where no such geometry exists (a
+    ledge, the grid's edge) it is the neighbour's whole cell square. Entries of existing links, and of
+    diagonals missing only because one of their sides is blocked, are NaN (no obstacle).
     """
     n = nbr.shape[0]
-    out = np.full((n, 8, 4), np.nan)
+    row = np.full(n, -1, np.int64)
+    b = 0
     for u in range(n):
+        for d in range(8):
+            if nbr[u, d] < 0:
+                row[u] = b
+                b += 1
+                break
+    out = np.full((b, 8, 4), np.nan)
+    for u in range(n):
+        r = row[u]
+        if r < 0:
+            continue
         for d in range(8):
             if nbr[u, d] >= 0:
                 continue
@@ -88,18 +100,18 @@ def blocking_rects(nbr, ix, iy, z, nx, ny, span_start, szlo, szhi, srect, x0, y0
                 if d >= 4 and (nbr[u, d - 4] < 0 or nbr[u, (d - 3) % 4] < 0):
                     continue  # cut off by a blocked side: that side's geometry counts, not this cell
                 bx0, by0, bx1, by1 = float(jx), float(jy), float(jx + 1), float(jy + 1)
-            out[u, d, 0] = bx0
-            out[u, d, 1] = by0
-            out[u, d, 2] = bx1
-            out[u, d, 3] = by1
-    return out
+            out[r, d, 0] = bx0
+            out[r, d, 1] = by0
+            out[r, d, 2] = bx1
+            out[r, d, 3] = by1
+    return row, out
 
 
 @njit(cache=True)
-def clearance(nbr, ix, iy, rects, limit):
+def clearance(nbr, ix, iy, row, rects, limit):
     """Distance in cells from each node centre to the nearest blocking rectangle (capped at `limit`).
 
-    `rects` comes from `blocking_rects`. The nearest rectangle is carried along the graph (vector
+    (row, rects) come from `blocking_rects`. The nearest rectangle is carried along the graph (vector
     propagation), so distances are Euclidean to within a fraction of a cell.
     """
     n = nbr.shape[0]
@@ -111,14 +123,17 @@ def clearance(nbr, ix, iy, rects, limit):
     hv = np.empty(cap, np.int64)
     size = 0
     for u in range(n):
+        r = row[u]
+        if r < 0:
+            continue
         cx = ix[u] + 0.5
         cy = iy[u] + 0.5
         for d in range(8):
-            if nbr[u, d] < 0 and not np.isnan(rects[u, d, 0]):
-                dd = _rect_dist(cx, cy, rects[u, d])
+            if nbr[u, d] < 0 and not np.isnan(rects[r, d, 0]):
+                dd = _rect_dist(cx, cy, rects[r, d])
                 if dd < dist[u]:
                     dist[u] = dd
-                    best[u] = rects[u, d]
+                    best[u] = rects[r, d]
         if dist[u] < np.inf:
             size = _heap_push(hk, hv, size, dist[u], u)
     while size > 0:

@@ -81,10 +81,17 @@ def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> G
     if not (kind == 1).any():
         raise NavMeshError(f"no surface is flatter than max_slope={s.max_slope} degrees; "
                            "is the up axis right (--up)? or raise --max-slope")
+    # sorted by column then height, one array at a time (the spans are the build's largest arrays)
     order = np.lexsort((zlo, col))
-    col, zlo, zhi, kind, rect = col[order], zlo[order], zhi[order], kind[order], rect[order]
+    col = col[order]
+    zlo = zlo[order]
+    zhi = zhi[order]
+    kind = kind[order]
+    rect = rect[order]
+    del order
     ncol, nz, nceil = _raster.make_nodes(col, zlo, zhi, kind,
                                          float(s.cell_height), float(s.cell_height), float(s.agent_height))
+    del kind
     if len(ncol) == 0:
         raise NavMeshError(f"no walkable surface has agent_height={s.agent_height} m of free space above it; "
                            "lower --agent-height")
@@ -93,12 +100,15 @@ def build_grid(vertices: np.ndarray, faces: np.ndarray, s: NavMeshSettings) -> G
     col_start = column_starts(ix, iy, nx, ny)
     nbr = _raster.link_nodes(col_start, ix, iy, nz, nceil, nx, ny, float(s.max_climb), float(s.agent_height))
     nbr = _raster.diagonals(nbr)
+    del ncol, nceil
     if s.agent_radius > 0:
         thr = (s.agent_radius - ERODE_SLACK * cs) / cs
         span_start = np.searchsorted(col, np.arange(nx * ny + 1))
-        rects = _graph.blocking_rects(nbr, ix, iy, nz, nx, ny, span_start, zlo, zhi, rect, x0, y0, cs,
-                                      float(s.max_climb), float(s.agent_height))
-        dist, nearest = _graph.clearance(nbr, ix, iy, rects, thr + 2.0)
+        row, rects = _graph.blocking_rects(nbr, ix, iy, nz, nx, ny, span_start, zlo, zhi, rect, x0, y0, cs,
+                                           float(s.max_climb), float(s.agent_height))
+        del col, zlo, zhi, rect, span_start
+        dist, nearest = _graph.clearance(nbr, ix, iy, row, rects, thr + 2.0)
+        del row, rects
         keep = dist >= thr
         if not keep.any():
             raise NavMeshError(f"no walkable area is wide enough for agent_radius={s.agent_radius} m; "
