@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._graph import _heap_pop, _heap_push
+from ._graph import _heap4_pop, _heap4_push
 
 
 @njit(cache=True)
@@ -58,6 +58,7 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
     dy = sy - y
     dz = sz - pz[v]
     len2 = dx * dx + dy * dy
+    inv_len2 = 1.0 / len2 if len2 > 0.0 else 0.0
     stepx = 1 if dx > 0 else -1
     stepy = 1 if dy > 0 else -1
     # parameter t in [0, 1] along the segment where the next x / y cell boundary is crossed
@@ -93,7 +94,7 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
         if cur < 0:
             return False
         # height of the line at the point nearest this cell's centre
-        tc = ((px[cur] - x) * dx + (py[cur] - y) * dy) / len2
+        tc = ((px[cur] - x) * dx + (py[cur] - y) * dy) * inv_len2
         tc = min(max(tc, 0.0), 1.0)
         if abs(pz[cur] - (pz[v] + tc * dz)) > ztol:
             return False
@@ -141,7 +142,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
             else:
                 klo[u] = -np.inf
                 khi[u] = np.inf
-            size = _heap_push(hk, hv, size, d, u)
+            size = _heap4_push(hk, hv, size, d, u)
     # The target node's centre is not the target: its neighbours cannot use the bracket test against it (which
     # needs settled neighbours anchored at the target), so the first ring is seeded by walking each segment.
     for j in range(tnode.shape[0]):
@@ -166,9 +167,9 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
             anchor[v] = n + j
             klo[v] = (dz - ztol) / dh
             khi[v] = (dz + ztol) / dh
-            size = _heap_push(hk, hv, size, d, v)
+            size = _heap4_push(hk, hv, size, d, v)
     while size > 0:
-        key, u, size = _heap_pop(hk, hv, size)
+        key, u, size = _heap4_pop(hk, hv, size)
         if done[u] or key > g[u]:
             continue
         done[u] = True
@@ -247,7 +248,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
                 anchor[v] = banchor
                 klo[v] = blo
                 khi[v] = bhi
-                size = _heap_push(hk, hv, size, best, v)
+                size = _heap4_push(hk, hv, size, best, v)
     return g, anchor, root
 
 
