@@ -73,6 +73,9 @@ def generate(
     ray_address: str | None = typer.Option(None, "--ray-address", help="Ray cluster address (default: local)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing data set at --out."),
     cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache of built-in houses and navmeshes."),
+    navmesh: Path | None = typer.Option(
+        None, "--navmesh", help="Navmesh file(s) from `navmesh build` (a file or a folder of them) to use instead "
+        "of building; checked against the scenes and navmesh settings."),
     up: str = UpOption,
     agent_radius: float = AgentRadiusOption,
     agent_height: float = AgentHeightOption,
@@ -104,6 +107,11 @@ def generate(
     sources = resolve_sources(scenes, splits_file=splits, split=split, only_splits=only_splits,
                               cache_dir=cache_dir, up=up)
     nav_cache = cache_dir / "navmesh" if cache_dir is not None else _default_navmesh_cache()
+    if navmesh is not None:
+        from ..navmesh.shared import adopt_for_sources, shared_navmesh_dir
+
+        nav_cache = nav_cache if nav_cache is not None else shared_navmesh_dir()
+        adopt_for_sources(navmesh, sources, nav, nav_cache)
     total = settings.per_scene * len(sources) * len(settings.tasks) * len(settings.agents)
     with progress("episodes", total, enabled=not (quiet or as_json)) as advance:
         report = generate_dataset(settings, sources, out, nav, executor=executor, workers=workers,

@@ -56,6 +56,7 @@ def build(
     import time
 
     from ..navmesh import NavMesh, NavMeshSettings
+    from ..navmesh.shared import shared_navmesh_dir, store_shared
 
     check_up(up)
     settings = NavMeshSettings(agent_radius=agent_radius, agent_height=agent_height, max_climb=max_climb,
@@ -72,8 +73,9 @@ def build(
         if old is not None and old.build_key == NavMesh.key_of(loaded, settings):
             nm, reused = old, True
     if nm is None:
-        nm = NavMesh.build(loaded, settings)
+        nm = NavMesh.build(loaded, settings) if force else NavMesh.build_cached(loaded, settings, shared_navmesh_dir())
         nm.save(out)
+    store_shared(nm, loaded)  # episodes generate and evaluate find it there
     payload = {
         "out": str(out),
         "reused": reused,
@@ -92,14 +94,14 @@ def build(
 
 
 def _load_scene(scene: str, up: str, scale: float | None) -> Any:
-    from ..scenes import load_scene
+    from ..scenes.cache import load_scene_geometry
 
     path = Path(scene)
     if not path.exists() and scene.startswith("house_"):
         from ..scenes.builtin import default_cache_dir, ensure_builtin_scenes
 
         path = ensure_builtin_scenes([scene], default_cache_dir())[scene]
-    return load_scene(path, up=up, scale=scale)  # type: ignore[arg-type]
+    return load_scene_geometry(path, up=up, scale=scale)  # type: ignore[arg-type]
 
 
 @app.command("info")

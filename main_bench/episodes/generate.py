@@ -92,14 +92,14 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
 
 def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
     from ..navmesh import NavMesh, NavMeshSettings
-    from ..scenes import load_scene
+    from ..scenes.cache import load_scene_geometry
     from .sampler import sample_episodes
     from .shards import batch_table, write_shard
     from .targets import TargetBank
 
     settings = GenerationSettings.from_json(spec["settings"])
     nav_settings = NavMeshSettings.from_json(spec["navmesh_settings"])
-    scene = load_scene(_scene_path(spec), up=spec["up"])
+    scene = load_scene_geometry(_scene_path(spec), up=spec["up"])
     if scene.content_hash != spec["scene_hash"]:
         raise DatasetError(f"scene {spec['scene_id']!r} changed since generation started (content hash "
                            f"{scene.content_hash[:12]} != {spec['scene_hash'][:12]}); start again with --overwrite",

@@ -6,7 +6,6 @@ Split files are JSON: `schema_version`, `name`, `source` ("builtin" or "mp3d"), 
 
 from __future__ import annotations
 
-import os
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -136,8 +135,9 @@ def _packaged(name: str) -> SplitFile:
 
 def default_cache_dir() -> Path:
     """Where generated houses and navmeshes are cached: $MAIN_BENCH_CACHE, else ~/.cache/main-bench."""
-    env = os.environ.get("MAIN_BENCH_CACHE")
-    return Path(env) if env else Path.home() / ".cache" / "main-bench"
+    from ..cache_root import cache_root
+
+    return cache_root()
 
 
 def seed_of(scene_id: str) -> int:

@@ -5,7 +5,7 @@ vertices and faces, objects, rooms, up/scale decisions, content hash), read back
 `<cache>/scenes/<key>.npz`. The key covers the file's and sidecar's bytes (`scene_content_hash`), the load
 options and the source of the loading code itself, so a changed file, option or loader never reuses an entry.
 
-A cached scene has no materials: its `meshes` is one untextured part holding all triangles. Consumers that
+A cached scene has no parts: its `meshes` is empty (and reading it does not import trimesh). Consumers that
 render (the simulator's cameras) load with `load_scene`; geometry consumers (navmesh builds, episode
 generation, queries) use `load_scene_geometry`.
 """
@@ -46,9 +46,9 @@ def scene_cache_key(path: str | Path, up: str = "auto", scale: float | None = No
 
 def default_scene_cache_dir() -> Path:
     """`<MAIN_BENCH_CACHE or ~/.cache/main-bench>/scenes`: where loaded scenes are cached."""
-    from .builtin import default_cache_dir
+    from ..cache_root import cache_root
 
-    return Path(default_cache_dir()) / "scenes"
+    return cache_root() / "scenes"
 
 
 def load_scene_geometry(path: str | Path, *, up: UpAxis = "auto", scale: float | None = None,
@@ -88,8 +88,6 @@ def _write(entry: Path, scene: Scene) -> None:
 
 
 def _read(entry: Path, path: Path) -> Scene | None:
-    import trimesh
-
     try:
         with np.load(entry, allow_pickle=False) as z:
             meta = json.loads(z["meta"].tobytes().decode())
@@ -102,7 +100,7 @@ def _read(entry: Path, path: Path) -> Scene | None:
                            name=str(o["name"]), room=str(o["room"]))
             for o, b in zip(meta["objects"], boxes, strict=True))
         return Scene(scene_id=str(meta["scene_id"]), path=path,
-                     meshes=(trimesh.Trimesh(vertices, faces, process=False),), vertices=vertices, faces=faces,
+                     meshes=(), vertices=vertices, faces=faces,
                      objects=objects, up_axis=meta["up_axis"], up_reason=str(meta["up_reason"]),
                      scale=float(meta["scale"]), scale_reason=str(meta["scale_reason"]),
                      content_hash=str(meta["content_hash"]), rooms=tuple(meta["rooms"]))

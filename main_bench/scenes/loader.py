@@ -10,10 +10,9 @@ import hashlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import trimesh
 
 from ..errors import SceneError
 from .objects import (
@@ -24,6 +23,9 @@ from .objects import (
     sidecar_path,
 )
 from .up_axis import decide_up
+
+if TYPE_CHECKING:
+    import trimesh
 
 UpAxis = Literal["y", "z", "auto"]
 SCENE_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
@@ -128,6 +130,8 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
                          path=path)
     if up not in ("y", "z", "auto"):
         raise SceneError(f"invalid up axis {up!r}; use y, z or auto", path=path)
+    import trimesh  # imported here: a scene read from the cache (`scenes.cache`) does not need it
+
     try:
         loaded = trimesh.load(str(path), force="scene", process=False)
     except Exception as exc:  # trimesh raises many kinds for unreadable files
@@ -203,6 +207,8 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
 
 def _flatten(loaded: trimesh.Scene) -> tuple[list[trimesh.Trimesh], list[str]]:
     """Every triangle mesh of the scene graph, with its node transform applied, and its node name."""
+    import trimesh
+
     parts, names = [], []
     for node in loaded.graph.nodes_geometry:
         transform, geom_name = loaded.graph[node]
