@@ -119,7 +119,7 @@ def _start(scene: Path, env: dict[str, str], repeats: int) -> dict[str, Any]:
 
 
 def _cli() -> list[str]:
-    return [sys.executable, "-c", "import sys; from main_bench.cli.app import main; sys.argv[0] = 'main-bench'; main()"]
+    return [sys.executable, "-c", "import sys; from main_bench.cli.app import main; sys.argv[0] = 'main-bench'; sys.exit(main())"]
 
 
 def _navmesh_build_cmd(scene: Path, out: Path) -> list[str]:
@@ -158,6 +158,8 @@ def _scene_rows(name: str, scene: Path, env: dict[str, str], quick: bool, work: 
 def run(quick: bool = False) -> dict[str, Any]:
     """Run the benchmark; returns a JSON-ready dict (machine, scenes, evaluate, goals met)."""
     machine = {**machine_info(), "loadavg_at_start": loadavg()}
+    from ..scenes.procedural import generate_house, write_house
+
     folder = real_scenes_folder()
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
@@ -170,7 +172,8 @@ def run(quick: bool = False) -> dict[str, Any]:
         rows = [_scene_rows(name, path, env, quick, work) for name, path in scenes]
         per_scene = 4 if quick else 12
         big = _evaluate(str(building), Path(rows[-1]["navmesh_file"]), work, env, per_scene)
-        small = _evaluate(f"house_{BUILDING_SEED:04d}", None, work, env, per_scene)
+        house = write_house(generate_house(BUILDING_SEED), work / "scenes")  # the built-in house, same bytes
+        small = _evaluate(str(house), None, work, env, per_scene)
     for r in rows:
         r.pop("navmesh_file")
     ratio = big["agent_steps_per_s"] / small["agent_steps_per_s"] if small["agent_steps_per_s"] else None

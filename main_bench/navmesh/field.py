@@ -41,7 +41,7 @@ class DistanceField:
         self._tpos = np.ascontiguousarray(tpos)
         self._tpos_surface = tpos.copy()
         self._tpos_surface[:, 2] = g.z[safe]
-        self._g, self._anchor, self._root = _field.propagate(g.nbr, navmesh._ax, navmesh._ay, g.zs, nodes,
+        self._g, self._anchor, self._root = _field.propagate(navmesh._links32(), navmesh._ax, navmesh._ay, g.zs, nodes,
                                                              self._tpos, LINE_Z_TOLERANCE, g.cell_size,
                                                              navmesh._px, navmesh._py, np.zeros(4, np.int64))
 
