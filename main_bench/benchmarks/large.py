@@ -113,8 +113,8 @@ def _start(scene: Path, env: dict[str, str], repeats: int) -> dict[str, Any]:
     first = _timed(cmd, env)
     again = [_timed(cmd, env) for _ in range(repeats)]
     return {"first": {k: first[k] for k in ("wall_s", "cpu_s", "loadavg")},
-            "repeat_wall_s": statistics.median(r["wall_s"] for r in again),
-            "repeat_cpu_s": statistics.median(r["cpu_s"] for r in again),
+            "repeat_wall_s": round(statistics.median(r["wall_s"] for r in again), 3),
+            "repeat_cpu_s": round(statistics.median(r["cpu_s"] for r in again), 3),
             "repeat_runs": [{k: r[k] for k in ("wall_s", "cpu_s", "loadavg")} for r in again]}
 
 
@@ -150,8 +150,8 @@ def _scene_rows(name: str, scene: Path, env: dict[str, str], quick: bool, work: 
     out = work / f"{scene.stem}.navmesh"
     _timed(_navmesh_build_cmd(scene, out), env)
     again = [_timed(_navmesh_build_cmd(scene, out), env) for _ in range(2 if quick else 3)]
-    start["navmesh_build_repeat_wall_s"] = statistics.median(r["wall_s"] for r in again)
-    start["navmesh_build_repeat_cpu_s"] = statistics.median(r["cpu_s"] for r in again)
+    start["navmesh_build_repeat_wall_s"] = round(statistics.median(r["wall_s"] for r in again), 3)
+    start["navmesh_build_repeat_cpu_s"] = round(statistics.median(r["cpu_s"] for r in again), 3)
     return {"scene": name, "file": scene.name, **nav, "start": start, "navmesh_file": str(out)}
 
 
@@ -183,7 +183,8 @@ def run(quick: bool = False) -> dict[str, Any]:
         "build_cpu_s_per_1000m2<=3": all(r["build"]["cpu_s_per_1000m2"] <= GOAL_BUILD_CPU_S for r in rows),
         "build_peak_mb_per_1000m2<=300": all(r["build"]["peak_mb_per_1000m2"] <= GOAL_BUILD_PEAK_MB for r in rows),
         "field_cpu_s_per_1000m2<=0.1": all(r["field"]["cpu_s_per_1000m2"] <= GOAL_FIELD_S for r in rows),
-        "repeat_load_start_s<1": all(r["start"]["repeat_wall_s"] < GOAL_START_S for r in rows),
+        "repeat_load_start_s<1 (wall)": all(r["start"]["repeat_wall_s"] < GOAL_START_S for r in rows),
+        "repeat_load_start_s<1 (cpu)": all(r["start"]["repeat_cpu_s"] < GOAL_START_S for r in rows),
         "evaluate_large_over_builtin>=0.5": ratio is not None and ratio >= GOAL_EVAL_RATIO,
     }
     return {"machine": {**machine_done(machine), "loadavg_at_end": loadavg()}, "quick": quick,
