@@ -25,8 +25,9 @@ from .objects import SemanticObject
 
 #: Bumped when the entry layout changes.
 CACHE_LAYOUT = 1
-#: Modules whose source is part of the key: any change to how a scene is read invalidates the cache.
-_LOADER_SOURCES = ("loader.py", "objects.py")
+#: Modules whose source is part of the key (the loader and what it imports to decide the frame and objects):
+#: any change to how a scene is read invalidates the cache.
+_LOADER_SOURCES = ("loader.py", "objects.py", "up_axis.py")
 
 
 def _code_hash() -> str:
