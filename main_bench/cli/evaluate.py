@@ -87,6 +87,10 @@ def evaluate(
     executor: str = typer.Option("local", "--executor", help="local or ray."),
     seed: int = typer.Option(0, "--seed", help="Evaluation seed (policy seeds derive from it and episode ids)."),
     track: str = typer.Option("egocentric", "--track", help="Sensor track: egocentric or gps."),
+    mode: str = typer.Option("central", "--mode", help="Coordination mode: central (one team policy), silent "
+                             "(one agent policy per agent, no messages) or comm (agent policies with messages)."),
+    message_floats: int = typer.Option(32, "--message-floats", help="comm mode: largest message per agent and "
+                                       "step, in float32 values (32 = 128 bytes)."),
     name: str = typer.Option("", "--name", help="Submission name for the leaderboard."),
     description: str = typer.Option("", "--description", help="Submission description."),
     link: list[str] = typer.Option([], "--link", help="Link to the method (repeatable)."),
@@ -103,7 +107,8 @@ def evaluate(
                                     "(recorded in the results and marked on the leaderboard)."),
     as_json: bool = JsonOption,
 ) -> None:
-    """Evaluate a team policy: per-episode records, trajectories and summary.json with 95% CIs."""
+    """Evaluate a policy (a team policy, or agent policies with --mode silent/comm): per-episode records,
+    trajectories and summary.json with 95% CIs."""
     if ctx.invoked_subcommand is not None:
         return
     from ..evaluation.runner import evaluate as run_evaluation
@@ -119,7 +124,8 @@ def evaluate(
         tasks=None if task == "both" else (task,),
         agents=None if agents is None else parse_int_list(agents, "--agents", 1, 64),
         workers=workers, renderer=renderer, limit=limit, executor=executor, seed=seed, track=track,
-        chunk_size=chunk_size, max_consecutive_failures=max_failures, cache_dir=cache_dir,
+        chunk_size=chunk_size, max_consecutive_failures=max_failures, cache_dir=cache_dir, mode=mode,
+        message_floats=message_floats,
         limits=PolicyLimits(step_seconds=step_seconds, episode_seconds=episode_seconds, memory_mb=memory_mb),
         submission=SubmissionMeta(name=name, description=description, links=tuple(link), date=date,
                                   baseline=baseline),

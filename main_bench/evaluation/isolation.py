@@ -35,7 +35,7 @@ from .sandbox import SandboxSettings, launch, popen, signal_of_exit
 from .submission import PolicySpec, ProtocolError
 
 #: The kinds a `PolicyError.reason` starts with.
-REASON_KINDS: tuple[str, ...] = ("exception", "timeout", "invalid_action", "dead", "memory")
+REASON_KINDS: tuple[str, ...] = ("exception", "timeout", "invalid_action", "invalid_message", "dead", "memory")
 NUM_ACTIONS = 4
 _SOCKET_BUFFER = 1 << 20  # one step of 3 agents x 128 x 128 RGB-D fits in one write where the kernel allows
 _THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMEXPR_NUM_THREADS",
@@ -91,8 +91,9 @@ class PolicyProcess:
     """
 
     def __init__(self, spec: PolicySpec, limits: Limits | None = None, seed: int = 0,
-                 sandbox: SandboxSettings | None = None) -> None:
+                 sandbox: SandboxSettings | None = None, role: str = "team") -> None:
         self.spec = spec
+        self.role = role
         self.limits = limits or Limits()
         self.seed = int(seed)
         self.sandbox = sandbox or SandboxSettings()
@@ -105,6 +106,7 @@ class PolicyProcess:
         self._finalizer: weakref.finalize | None = None
         self._seq = 0
         self._episode_used = 0.0
+        self._waiting: tuple[str, float, float, str] | None = None
         self._start()
 
     # -- public API ---------------------------------------------------------------------------------------------
@@ -120,16 +122,28 @@ class PolicyProcess:
         return self._proc is not None and self._proc.poll() is None
 
     def reset(self, info: Any) -> None:
-        """Start an episode (`EpisodeInfo`); starts a fresh process first if the last one was stopped."""
+        """Start an episode (`EpisodeInfo`, or `AgentInfo` for an agent policy); starts a fresh process first if
+        the last one was stopped."""
+        self.send_reset(info)
+        self.receive()
+
+    def act(self, observations: dict[str, dict]) -> dict[str, int]:
+        """One step: the acting agents' observations in, one validated action (int 0..3) per acting agent out."""
+        self.send_act(observations)
+        return validate_actions(self.receive(), observations.keys())
+
+    def send_reset(self, info: Any) -> None:
+        """The first half of `reset`: send the request; `receive()` waits for the answer. Lets an evaluator
+        start several processes' resets before waiting for any."""
         if not self.alive:
             self.restart()
         self._episode_used = 0.0
         budget = min(self.limits.reset_seconds, self.limits.episode_seconds)
-        what = "reset" if budget == self.limits.reset_seconds else "episode"
-        self._call("reset", info, budget, what)
+        self._send("reset", info, budget, "reset" if budget == self.limits.reset_seconds else "episode")
 
-    def act(self, observations: dict[str, dict]) -> dict[str, int]:
-        """One step: the acting agents' observations in, one validated action (int 0..3) per acting agent out."""
+    def send_act(self, payload: Any) -> None:
+        """The first half of `act` (team: the observations; agent: `(observation, inbox)`); `receive()` waits
+        for the answer."""
         if self._proc is not None and self._proc.poll() is not None:
             raise PolicyError(self._death_reason())  # it died on its own since the last call
         if not self.alive:
@@ -138,15 +152,32 @@ class PolicyProcess:
         if left <= 0:
             raise PolicyError(f"timeout: episode took > {self.limits.episode_seconds:g} s")
         budget, what = (self.limits.step_seconds, "act") if self.limits.step_seconds <= left else (left, "episode")
-        reply = self._call("act", observations, budget, what)
-        return validate_actions(reply, observations.keys())
+        self._send("act", payload, budget, what)
+
+    def receive(self) -> dict[str, Any]:
+        """Wait for the answer to the request `send_reset`/`send_act` sent (within its time budget); returns the
+        reply or raises `PolicyError`."""
+        assert self._waiting is not None, "nothing was sent"
+        op, started, deadline, what = self._waiting
+        self._waiting = None
+        try:
+            reply = self._receive(deadline, what)
+        finally:
+            self._episode_used += time.monotonic() - started
+        return self._checked(reply, op)
+
+    @property
+    def waiting(self) -> bool:
+        """Whether a request was sent and its answer not yet received."""
+        return self._waiting is not None
 
     def probe(self, request: dict[str, Any]) -> dict[str, Any]:
         """Have the policy process try a cheater's reads, writes and connections (`escape_probe`); returns
         what succeeded. Used by `check-agent`'s isolation check, never during evaluation."""
         if not self.alive:
             raise PolicyError("dead: the policy process was stopped after an earlier failure")
-        return self._call("probe", request, self.limits.load_seconds, "probe")
+        self._send("probe", request, self.limits.load_seconds, "probe")
+        return self.receive()
 
     def restart(self) -> None:
         """Kill the current process (if any) and start a fresh one with the same spec and seed."""
@@ -193,6 +224,7 @@ class PolicyProcess:
         self._finalizer = weakref.finalize(self, _kill_process, proc, parent)
         self._episode_used = 0.0
         boot = {"spec": (self.spec.kind, self.spec.target, self.spec.attr, self.spec.root), "seed": self.seed,
+                "role": self.role,
                 "memory_mb": self.limits.memory_mb, "threads": self.limits.threads, "sys_path": list(sys.path)}
         started = time.monotonic()
         reply = self._exchange(boot, self.limits.load_seconds, "loading")
@@ -208,13 +240,37 @@ class PolicyProcess:
         self.policy_name = str(reply.get("policy", ""))
         self.load_seconds = time.monotonic() - started
 
-    def _call(self, op: str, payload: Any, budget: float, what: str) -> dict[str, Any]:
+    def _send(self, op: str, payload: Any, budget: float, what: str) -> None:
+        assert self._sock is not None and self._proc is not None, "no policy process"
         self._seq += 1
         started = time.monotonic()
+        deadline = started + budget
+        limit = self.limits.episode_seconds if what == "episode" else budget
         try:
-            reply = self._exchange((op, self._seq, payload), budget, what)
-        finally:
-            self._episode_used += time.monotonic() - started
+            send_parts(self._sock, encode_request((op, self._seq, payload)), deadline)
+        except TimeoutError:
+            self._kill()
+            raise PolicyError(f"timeout: {what} took > {limit:g} s") from None
+        except (EOFError, ConnectionError):
+            raise PolicyError(self._death_reason()) from None
+        self._waiting = (op, started, deadline, what)
+
+    def _receive(self, deadline: float, what: str) -> dict[str, Any]:
+        assert self._sock is not None and self._proc is not None, "no policy process"
+        limit = self.limits.episode_seconds if what == "episode" else self.limits.step_seconds if what == "act" \
+            else self.limits.reset_seconds
+        try:
+            return recv_reply(self._sock, deadline)
+        except TimeoutError:
+            self._kill()
+            raise PolicyError(f"timeout: {what} took > {limit:g} s") from None
+        except (EOFError, ConnectionError):
+            raise PolicyError(self._death_reason()) from None
+        except ValueError as exc:
+            self._kill()
+            raise PolicyError(f"invalid_action: unreadable reply from the policy process ({exc})") from None
+
+    def _checked(self, reply: dict[str, Any], op: str) -> dict[str, Any]:
         if reply.get("stage") == "request" and reply.get("status") == "error":
             self._kill()
             raise self._policy_exception(reply, f"receiving the {op} request")
@@ -282,6 +338,7 @@ class PolicyProcess:
         return f"dead: exit code {code}"
 
     def _kill(self) -> None:
+        self._waiting = None
         if self._finalizer is not None:
             self._finalizer()
         self._proc = self._sock = self._finalizer = None
@@ -318,6 +375,22 @@ def validate_actions(reply: dict[str, Any], acting: Any) -> dict[str, int]:
         raise PolicyError(f"invalid_action: no action for {', '.join(missing)}; return one action for every "
                           "agent in the observations")
     return actions
+
+
+def validate_agent_answer(reply: dict[str, Any], agent_id: str) -> tuple[int, Any]:
+    """Check an agent policy process's `act` reply: returns (action 0..3, the message as the process described
+    it) or raises `PolicyError` (`invalid_action: ...`) naming the agent and the value."""
+    if "not_pair" in reply:
+        raise PolicyError(f"invalid_action: {agent_id} act returned {_shown(reply['not_pair'])}; return "
+                          "(action, message) or (action, None)")
+    if "action" not in reply:
+        raise PolicyError("invalid_action: unreadable reply from the policy process (no action)")
+    value = reply["action"]
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise PolicyError(f"invalid_action: {agent_id} returned {_shown(value)}; return an int in 0..3")
+    if not 0 <= value < NUM_ACTIONS:
+        raise PolicyError(f"invalid_action: {agent_id} returned {value}, outside the actions 0..3")
+    return value, reply.get("message")
 
 
 def _shown(value: Any) -> str:

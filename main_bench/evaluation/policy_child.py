@@ -2,8 +2,10 @@
 
 It limits its own address space and threads, loads the submission, then answers requests on the socket FD:
 `("reset", seq, EpisodeInfo)`, `("act", seq, observations)`, `("close", seq, None)`, and from `check-agent`
-only `("probe", seq, request)` (`escape_probe.try_escapes`). Replies are JSON; actions
-are described, not judged (the evaluator validates them): ints as ints, anything else by its type and repr.
+only `("probe", seq, request)` (`escape_probe.try_escapes`); an agent policy (role `agent`, modes silent and
+comm) gets `("reset", seq, AgentInfo)` and `("act", seq, (observation, inbox))`. Replies are JSON; actions and
+messages are described, not judged (the evaluator validates them): ints as ints, anything else by its type and
+repr.
 Its stdout goes to the evaluator's stderr so that a policy's prints never mix with machine-readable output.
 """
 
@@ -17,6 +19,8 @@ import sys
 import time
 import traceback
 from typing import Any
+
+import numpy as np
 
 from .ipc import recv_request, send_reply
 
@@ -47,7 +51,7 @@ def main(argv: list[str]) -> int:
     policy = _load(sock, boot)
     if policy is None:
         return 0
-    return _serve(sock, policy)
+    return _serve(sock, policy, boot.get("role", "team"))
 
 
 def _limit_memory(memory_mb: int) -> None:
@@ -83,7 +87,7 @@ def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
 
         spec = PolicySpec(*boot["spec"])
         try:
-            policy = load_policy(spec, boot["seed"])
+            policy = load_policy(spec, boot["seed"], boot.get("role", "team"))
         except ProtocolError as exc:
             _reply(sock, {"status": "error", "stage": "protocol", **_describe(exc)})
             return None
@@ -99,7 +103,7 @@ def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
     return policy
 
 
-def _serve(sock: socket.socket, policy: Any) -> int:
+def _serve(sock: socket.socket, policy: Any, role: str) -> int:
     from .submission import seed_everything
 
     while True:
@@ -123,6 +127,8 @@ def _serve(sock: socket.socket, policy: Any) -> int:
                 from .escape_probe import try_escapes
 
                 reply = {"status": "ok", **try_escapes(payload)}
+            elif role == "agent":
+                reply = {"status": "ok", **encode_agent_answer(policy.act(*payload))}
             else:
                 reply = {"status": "ok", **encode_actions(policy.act(payload))}
         except BaseException as exc:  # noqa: BLE001 - the policy's failure is the reply
@@ -146,9 +152,24 @@ def encode_actions(result: Any) -> dict[str, Any]:
     return {"actions": pairs}
 
 
-def _encode_value(value: Any) -> Any:
-    import numpy as np
+def encode_agent_answer(result: Any) -> dict[str, Any]:
+    """Describe what an agent policy's `act` returned: `{"action": ..., "message": ...}`.
 
+    `(action, message)`, or a bare action (no message). The action as `encode_actions` describes values, the
+    message as `channel.describe_message` does; anything else is `{"not_pair": ...}`.
+    """
+    from .channel import describe_message
+
+    if isinstance(result, tuple | list) and len(result) == 2:
+        action, message = result
+    elif isinstance(result, int | np.integer) and not isinstance(result, bool | np.bool_):
+        action, message = result, None
+    else:
+        return {"not_pair": _marker(result)}
+    return {"action": _encode_value(action), "message": describe_message(message)}
+
+
+def _encode_value(value: Any) -> Any:
     if isinstance(value, bool | np.bool_):
         return _marker(value)
     if isinstance(value, int | np.integer):

@@ -99,3 +99,72 @@ def observation_space(width: int, height: int, max_depth: float, track: str, goa
     if track == "gps":
         entries["gps_compass"] = spaces.Box(-1000.0, 1000.0, shape=(4,), dtype=np.float32)
     return spaces.Dict(entries)
+
+
+#: Coordination modes. `central`: one `TeamPolicy` sees every agent's observation (an upper reference).
+#: `silent`: one `AgentPolicy` per agent, each in its own process, no messages. `comm`: as silent, plus messages.
+MODES: tuple[str, ...] = ("central", "silent", "comm")
+#: Default largest message in `comm` mode: 32 float32 values (128 bytes) per agent and step.
+DEFAULT_MESSAGE_FLOATS = 32
+#: Bytes of one message value (float32).
+MESSAGE_VALUE_BYTES = 4
+
+
+@dataclass(frozen=True)
+class AgentInfo:
+    """Given to `AgentPolicy.reset` at the start of every episode: what one agent may know.
+
+    `agent_id` is this agent, `agent_ids` the whole team (the addresses a message may name), `target` only its
+    own target. `seed` is this agent's episode seed (derived from the episode seed and its id). `message_floats`
+    is the largest message it may send (0 in `silent` mode).
+    """
+
+    agent_id: str
+    agent_ids: tuple[str, ...]
+    task: Literal["shared", "individual"]
+    track: str
+    target: TargetInfo
+    max_steps: int
+    seed: int
+    mode: str
+    message_floats: int
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@runtime_checkable
+class AgentPolicy(Protocol):
+    """One agent's policy (`silent` and `comm` modes): each agent of a team runs its own instance.
+
+    `act` gets this agent's observation and its inbox (`inbox_space`: row j holds what agent j sent it on the
+    previous step, `lengths[j]` values of it, 0 when nothing arrived) and returns `(action, message)`. A message
+    is None (send nothing), a 1-D vector of at most `message_floats` real numbers (sent to every teammate as
+    float32), or `{"to": agent_id, "data": vector}` (sent to that teammate only).
+    """
+
+    def reset(self, info: AgentInfo) -> None:
+        """Start a new episode."""
+
+    def act(self, observation: Observation, inbox: dict[str, np.ndarray]) -> tuple[int, Any]:
+        """(action in 0..3, message or None)."""
+
+
+def inbox_space(agents: int, message_floats: int):
+    """The Gymnasium `Dict` space of an inbox: `messages` float32 (N, F) and `lengths` int32 (N,) in 0..F."""
+    from gymnasium import spaces
+
+    return spaces.Dict({
+        "messages": spaces.Box(-np.inf, np.inf, shape=(agents, message_floats), dtype=np.float32),
+        "lengths": spaces.Box(0, message_floats, shape=(agents,), dtype=np.int32),
+    })
+
+
+def message_action_space(agents: int, message_floats: int):
+    """The Gymnasium `Dict` space of an action with a message: `action` Discrete(4), `message` float32 (F,)
+    and `to` Discrete(N + 1, start=-1) (-1: every teammate, j: agent j only)."""
+    from gymnasium import spaces
+
+    return spaces.Dict({
+        "action": action_space(),
+        "message": spaces.Box(-np.inf, np.inf, shape=(message_floats,), dtype=np.float32),
+        "to": spaces.Discrete(agents + 1, start=-1),
+    })

@@ -3,7 +3,9 @@
 A results directory holds `records/split=<s>/task=<t>/agents=<n>/part-<k>.parquet` (one row per (episode,
 agent) with `agent_index` 0..N-1, plus one team row per episode with `agent_index` -1),
 `trajectories/split=<s>/task=<t>/agents=<n>/part-<k>.parquet` (one row per agent per step, step 0 = start),
-and `summary.json`. Distances in metres, yaw in radians.
+and `summary.json`. Distances in metres, yaw in radians. Message columns (`messages`, `message_bytes`,
+`message_to`) are zero (`message_to` -2) outside the `comm` mode; results written before they existed read
+them as missing, which readers take as zero.
 """
 
 from __future__ import annotations
@@ -29,6 +31,8 @@ RECORD_SCHEMA = pa.schema(
         pa.field("geodesic_distance", pa.float32(), nullable=False),  # l_i; team: L as DESIGN.md defines it
         pa.field("called_found", pa.bool_(), nullable=False),
         pa.field("failure", pa.string(), nullable=False),  # "" or why the policy failed (exception, timeout, ...)
+        pa.field("messages", pa.int32(), nullable=False),  # comm mode: messages sent; team: sum over agents
+        pa.field("message_bytes", pa.int64(), nullable=False),  # comm mode: bytes sent; team: sum over agents
     ],
     metadata={"main_bench_schema_version": str(RESULTS_SCHEMA_VERSION)},
 )
@@ -45,6 +49,8 @@ TRAJECTORY_SCHEMA = pa.schema(
         pa.field("yaw", pa.float32(), nullable=False),
         pa.field("collided", pa.bool_(), nullable=False),
         pa.field("distance_to_goal", pa.float32(), nullable=False),
+        pa.field("message_bytes", pa.int32(), nullable=False),  # bytes the agent sent at this step (0: none)
+        pa.field("message_to", pa.int8(), nullable=False),  # its recipient: -1 every teammate, -2 nobody
     ],
     metadata={"main_bench_schema_version": str(RESULTS_SCHEMA_VERSION)},
 )

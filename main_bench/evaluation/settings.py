@@ -12,9 +12,11 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
-from .protocol import TRACKS
+from .protocol import DEFAULT_MESSAGE_FLOATS, MODES, TRACKS
 
 EXECUTORS = ("local", "ray")
+#: The largest `message_floats` a data set or track may set (the longest message a policy process describes).
+MAX_MESSAGE_FLOATS = 4096
 RENDERERS = ("auto", "gl", "tiny")
 
 
@@ -60,6 +62,8 @@ class EvalSettings:
     policy process as MAIN_BENCH_TORCH_DEVICE); None: EGL's default display and the policy's own choice.
     `max_consecutive_failures`: policy failures in a row after which evaluation stops (PolicyFailure).
     `sandbox`: run submitted policies in the bubblewrap sandbox (`sandbox.py`); False is `--no-sandbox`.
+    `mode`: coordination mode (`central` team policy, `silent` or `comm` agent policies); `message_floats`: the
+    largest message of the `comm` mode in float32 values (0 in the other modes, whatever is given).
     """
 
     episodes: Path
@@ -77,6 +81,8 @@ class EvalSettings:
     chunk_size: int = 8
     max_consecutive_failures: int = 5
     cache_dir: Path | None = None
+    mode: str = "central"
+    message_floats: int = DEFAULT_MESSAGE_FLOATS
     limits: PolicyLimits = field(default_factory=PolicyLimits)
     submission: SubmissionMeta = field(default_factory=SubmissionMeta)
     sandbox: bool = True
@@ -93,6 +99,11 @@ class EvalSettings:
             raise InputError(f"--executor must be local or ray, got {self.executor!r}")
         if self.track not in TRACKS:
             raise InputError(f"--track must be one of {', '.join(TRACKS)}, got {self.track!r}")
+        if self.mode not in MODES:
+            raise InputError(f"--mode must be one of {', '.join(MODES)}, got {self.mode!r}")
+        if not (isinstance(self.message_floats, int) and 1 <= self.message_floats <= MAX_MESSAGE_FLOATS):
+            raise InputError(f"--message-floats must be an integer from 1 to {MAX_MESSAGE_FLOATS}, got "
+                             f"{self.message_floats!r}")
         if self.limit is not None and self.limit < 1:
             raise InputError(f"--limit must be at least 1 episode, got {self.limit}")
         if self.chunk_size < 1:
@@ -121,7 +132,14 @@ class EvalSettings:
             "chunk_size": self.chunk_size,
             "renderer": self.renderer,
             "sandbox": self.sandbox,
+            "mode": self.mode,
+            "message_floats": self.channel_floats,
         }
+
+    @property
+    def channel_floats(self) -> int:
+        """The largest message in float32 values: `message_floats` in `comm` mode, 0 otherwise."""
+        return self.message_floats if self.mode == "comm" else 0
 
     def to_json(self) -> dict[str, Any]:
         """Every setting as JSON (`summary.json` -> `settings`)."""

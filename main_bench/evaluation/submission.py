@@ -155,30 +155,43 @@ def instantiate_policy(spec: PolicySpec, seed: int) -> Any:
                               f"{type(exc).__name__}: {exc}") from exc
 
 
-def check_protocol(policy: Any, spec: PolicySpec | str) -> Any:
-    """Return `policy` if it has callable `reset(info)` and `act(observations)`; otherwise raise `ProtocolError`."""
+#: What a loaded object must offer, per role: the team policy of `central` mode, the agent policy of the others.
+ROLES: dict[str, tuple[int, str, str]] = {
+    "team": (1, "observations", "a team policy needs reset(info) and act(observations) -> {agent_id: action}"),
+    "agent": (2, "observation, inbox", "an agent policy needs reset(info) and act(observation, inbox) -> "
+              "(action, message)"),
+}
+
+
+def check_protocol(policy: Any, spec: PolicySpec | str, role: str = "team") -> Any:
+    """Return `policy` if it has callable `reset(info)` and `act` with the role's arguments (`team`:
+    observations; `agent`: observation, inbox); otherwise raise `ProtocolError`."""
+    act_args, act_names, need = ROLES[role]
     missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
     if missing:
         raise ProtocolError(
-            f"policy spec {spec}: the loaded {type(policy).__name__} has no callable {' or '.join(missing)}; "
-            "a team policy needs reset(info) and act(observations) -> {agent_id: action}"
+            f"policy spec {spec}: the loaded {type(policy).__name__} has no callable {' or '.join(missing)}; {need}"
         )
-    for method, wanted in (("reset", 1), ("act", 1)):
+    for method, wanted in (("reset", 1), ("act", act_args)):
         if not _accepts_positional(getattr(policy, method), wanted):
+            hint = "" if method != "act" else ("; an agent policy (act(observation, inbox)) runs with --mode silent "
+                                               "or comm" if role == "team" else "; a team policy (act(observations)) "
+                                               "runs with --mode central")
             raise ProtocolError(
-                f"policy spec {spec}: {type(policy).__name__}.{method} does not accept one positional argument; "
-                f"define {method}(self, {'info' if method == 'reset' else 'observations'})"
+                f"policy spec {spec}: {type(policy).__name__}.{method} does not accept {wanted} positional "
+                f"argument{'s' if wanted > 1 else ''}; define {method}(self, "
+                f"{'info' if method == 'reset' else act_names}){hint}"
             )
     return policy
 
 
-def load_policy(spec: PolicySpec, seed: int) -> Any:
-    """Load the team policy `spec` names into the current process, seeding global generators with `seed`.
+def load_policy(spec: PolicySpec, seed: int, role: str = "team") -> Any:
+    """Load the policy `spec` names into the current process, seeding global generators with `seed`.
 
-    Returns an object following `TeamPolicy`. Raises `SubmissionError` (`ProtocolError` when the object lacks
-    `reset`/`act`) with the spec and the cause.
+    `role` `team` (a `TeamPolicy`, central mode) or `agent` (an `AgentPolicy`, silent and comm modes). Raises
+    `SubmissionError` (`ProtocolError` when the object lacks the role's `reset`/`act`) with the spec and the cause.
     """
-    policy = check_protocol(instantiate_policy(spec, seed), spec)
+    policy = check_protocol(instantiate_policy(spec, seed), spec, role)
     seed_everything(seed)
     return policy
 

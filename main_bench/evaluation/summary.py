@@ -2,7 +2,8 @@
 
 A pure function of the metric records (plus the run's metadata), so it can be rebuilt from a results directory.
 Track keys are `<split>/<task>/<agents>`. Each track holds `episodes`, `failed_episodes`, and for the team rows
-(`team`) and the agent rows (`agent`) each metric's `{mean, ci_low, ci_high}`.
+(`team`) and the agent rows (`agent`) each metric's `{mean, ci_low, ci_high}`, and `communication`: messages and
+bytes sent and the mean bytes per agent-step (also for the whole run at the top level).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .channel import communication_stats
 from .metrics import AGENT_METRICS, TEAM_METRICS, bootstrap_ci
 from .records import RESULTS_SCHEMA_VERSION, TEAM
 
@@ -46,6 +48,7 @@ def track_stats(records: pd.DataFrame, key: str, seed: int) -> dict[str, Any]:
     return {
         "episodes": int(len(team)),
         "failed_episodes": int((team["failure"] != "").sum()),
+        "communication": communication_stats(records),
         "team": {m: _stats(team[m].to_numpy(dtype=np.float64), _ci_seed(seed, key, "team:" + m))
                  for m in TEAM_METRICS},
         "agent": {m: _stats(agent[m].to_numpy(dtype=np.float64), _ci_seed(seed, key, "agent:" + m))
@@ -78,6 +81,8 @@ def build_summary(records: pd.DataFrame, seed: int, meta: dict[str, Any]) -> dic
             "failed_episodes": int(len(failed)),
             "failures_by_kind": dict(sorted(reasons.items())),
         },
+        "communication": communication_stats(records) if not records.empty else communication_stats(
+            pd.DataFrame({"agent_index": [], "steps": []})),
         "failures": [{"episode_id": str(r.episode_id), "reason": str(r.failure)} for r in listed.itertuples()],
         "tracks": tracks,
     }

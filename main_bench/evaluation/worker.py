@@ -98,6 +98,13 @@ class WorkerContext:
 
     def _policy_for(self) -> Any:
         if self._policy is None:
+            if self.settings.mode != "central":
+                from .agents import DecentralizedTeam
+
+                make, self._privileged = agent_endpoints(self.settings)
+                self._policy = DecentralizedTeam(make, self.settings.mode, self.settings.channel_floats,
+                                                 self._privileged)
+                return self._policy
             factory = privileged_baseline(self.settings.agent)
             if factory is not None:
                 self._policy, self._privileged = factory(self.settings.seed), True
@@ -145,9 +152,11 @@ class WorkerContext:
                                                 self._privileged, render, plan_fields)
             steps_total += steps
             agents, team = episode_metrics(trace, episode.geodesic_distances, rules.task, rules.success_distance)
+            talk = message_log(policy, trace)
             for row in [*agents, team]:
-                records.append({**row, "episode_id": episode_id, "scene_id": episode.scene_id, "failure": failure})
-            trajectories.append(trajectory_table(trace))
+                records.append({**row, "episode_id": episode_id, "scene_id": episode.scene_id, "failure": failure,
+                                **message_counts(talk, int(row["agent_index"]))})
+            trajectories.append(trajectory_table(trace, talk))
             if failure:
                 failures.append(f"{episode_id}: {failure}")
                 self.streak.append(f"{episode_id}: {failure}")
@@ -176,9 +185,50 @@ class WorkerContext:
         self._policy = None
 
 
-def trajectory_table(trace: EpisodeTrace) -> pa.Table:
-    """The trace as `TRAJECTORY_SCHEMA` rows (step-major, agent-minor)."""
+def agent_endpoints(settings: EvalSettings) -> tuple[Callable[[int], Any], bool]:
+    """(agent index -> endpoint, privileged) for the decentralized modes: the privileged baselines run in this
+    process, one restricted instance per agent; a submission runs one `PolicyProcess` per agent."""
+    from .baselines import PRIVILEGED, privileged_baseline
+
+    if privileged_baseline(settings.agent) is not None:
+        from .baselines.agent import PrivilegedAgent
+
+        kind = next(k for k in PRIVILEGED if settings.agent.strip() == f"baseline:{k}")
+        return (lambda i: PrivilegedAgent(kind, i, settings.seed)), True
+    from .agents import ProcessEndpoint
+    from .isolation import Limits
+    from .submission import parse_spec
+
+    limits = Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
+                    memory_mb=settings.limits.memory_mb)
+    spec = parse_spec(settings.agent)
+    return (lambda i: ProcessEndpoint(spec, limits, settings.seed)), False
+
+
+def message_log(policy: Any, trace: EpisodeTrace) -> tuple[np.ndarray, np.ndarray]:
+    """Per step 0..T and agent: bytes sent (int32) and recipient (int8, -1 all, -2 none) in the episode just
+    played; zeros and -2 for a policy without a channel (central mode) and at step 0."""
     steps, n = trace.actions.shape
+    sent = np.zeros((steps, n), dtype=np.int32)
+    to = np.full((steps, n), -2, dtype=np.int8)
+    channel = getattr(policy, "channel", None)
+    if channel is not None:
+        log_bytes, log_to = channel.log()
+        k = min(len(log_bytes), steps - 1)  # committed steps; a failed step's messages are not
+        sent[1:k + 1], to[1:k + 1] = log_bytes[:k], log_to[:k]
+    return sent, to
+
+
+def message_counts(talk: tuple[np.ndarray, np.ndarray], agent_index: int) -> dict[str, int]:
+    """`messages` and `message_bytes` of one agent (index) or of the team (-1, the sums) in an episode."""
+    sent = talk[0] if agent_index < 0 else talk[0][:, agent_index]
+    return {"messages": int((sent > 0).sum()), "message_bytes": int(sent.sum())}
+
+
+def trajectory_table(trace: EpisodeTrace, talk: tuple[np.ndarray, np.ndarray] | None = None) -> pa.Table:
+    """The trace as `TRAJECTORY_SCHEMA` rows (step-major, agent-minor), with what each agent sent per step."""
+    steps, n = trace.actions.shape
+    sent, to = talk if talk is not None else (np.zeros((steps, n), np.int32), np.full((steps, n), -2, np.int8))
     return pa.Table.from_pydict(
         {
             "episode_id": [trace.episode_id] * (steps * n),
@@ -191,6 +241,8 @@ def trajectory_table(trace: EpisodeTrace) -> pa.Table:
             "yaw": trace.yaws.reshape(-1).astype(np.float32),
             "collided": trace.collided.reshape(-1),
             "distance_to_goal": trace.distances.reshape(-1).astype(np.float32),
+            "message_bytes": sent.reshape(-1).astype(np.int32),
+            "message_to": to.reshape(-1).astype(np.int8),
         },
         schema=TRAJECTORY_SCHEMA,
     )

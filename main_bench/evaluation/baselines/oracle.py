@@ -105,6 +105,11 @@ class OracleBaseline:
             out[agent_id] = self._act_one(i, pos[i], float(yaw[i]), float(dist[i]), contact)
         return out
 
+    def note_action(self, i: int, action: int) -> None:
+        """Agent i took `action` without asking the oracle (a decentralized agent yielding): its stuck detection
+        then judges the next step against that action."""
+        self._plans[i].last_action = int(action)
+
     def _act_one(self, i: int, pos: np.ndarray, yaw: float, dist: float, contact: bool) -> int:
         world, plan, st = self._world, self._plans[i], self.settings
         assert world is not None
