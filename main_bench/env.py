@@ -21,6 +21,15 @@ the team succeeded. An agent is *terminated* when it called `found` or the episo
 
 Each `reset` draws an episode from the env's generator (seeded by `reset(seed=...)`), or plays
 `options={"episode_id": ...}`.
+
+Messages (the `comm` mode's channel, `message_floats=F` > 0): every observation then also holds `inbox`
+(`protocol.inbox_space`: row j is what agent j sent this agent on the previous step, `lengths[j]` values of
+it), and an action may carry a message: `{"action": a, "message": (F,) float32, "to": -1 or j}`
+(`protocol.message_action_space`), or `(action, message)` exactly as an `AgentPolicy` returns it, or a bare
+action (no message). The channel's rules are the evaluator's (`evaluation.channel`), so an agent policy
+trained here runs unchanged under `main-bench evaluate --mode comm`:
+
+    action, message = policy.act(observation, observation["inbox"])
 """
 
 from __future__ import annotations
@@ -35,7 +44,15 @@ from pettingzoo import ParallelEnv
 
 from .errors import DatasetError, InputError
 from .evaluation.episode_loop import build_observations, measure_distances, target_observations
-from .evaluation.protocol import FOUND, TRACKS, action_space, agent_ids, observation_space
+from .evaluation.protocol import (
+    FOUND,
+    TRACKS,
+    action_space,
+    agent_ids,
+    inbox_space,
+    message_action_space,
+    observation_space,
+)
 
 GOAL_KINDS = ("object", "point")
 
@@ -65,7 +82,7 @@ class MainParallelEnv(ParallelEnv):
                  task: str | None = None, goal: str | None = None, track: str = "egocentric",
                  renderer: str = "auto", image_size: int | None = None, reward: RewardSettings | None = None,
                  max_steps: int | None = None, cache_dir: str | Path | None = None, seed: int = 0,
-                 render_mode: str | None = None) -> None:
+                 render_mode: str | None = None, message_floats: int = 0) -> None:
         from dataclasses import replace
 
         from .episodes.dataset import load_episodes, read_manifest
@@ -80,6 +97,9 @@ class MainParallelEnv(ParallelEnv):
             raise InputError(f"goal must be object, point or None, got {goal!r}")
         if render_mode not in (None, "rgb_array"):
             raise InputError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if not (isinstance(message_floats, int) and 0 <= message_floats <= 4096):
+            raise InputError(f"message_floats must be an integer from 0 (no messages) to 4096, got {message_floats!r}")
+        self.message_floats = message_floats
         self.manifest = read_manifest(episodes)
         sizes = sorted({int(s.agents) for s in self.manifest.shards if s.split == split
                         and (task is None or s.task == task)})
@@ -115,6 +135,13 @@ class MainParallelEnv(ParallelEnv):
         self._obs_spaces = {a: observation_space(cam.width, cam.height, cam.max_depth, track, goal)
                             for a in self.possible_agents}
         self._act_spaces = {a: action_space() for a in self.possible_agents}
+        if message_floats:
+            from gymnasium import spaces
+
+            self._obs_spaces = {a: spaces.Dict({**space.spaces, "inbox": inbox_space(n, message_floats)})
+                                for a, space in self._obs_spaces.items()}
+            self._act_spaces = {a: message_action_space(n, message_floats) for a in self.possible_agents}
+        self._channel: Any = None
         self._resources = EpisodeResources(self.manifest, sim_settings, None if cache_dir is None else Path(cache_dir),
                                            seed)
         self._rng = np.random.default_rng(seed)
@@ -128,7 +155,7 @@ class MainParallelEnv(ParallelEnv):
         return self._obs_spaces[agent]
 
     def action_space(self, agent: str):
-        """`Discrete(4)` (the same object on every call)."""
+        """`Discrete(4)`, or with messages `protocol.message_action_space` (the same object on every call)."""
         return self._act_spaces[agent]
 
     # -- episodes -----------------------------------------------------------------------------------------------
@@ -163,6 +190,7 @@ class MainParallelEnv(ParallelEnv):
         self._collided = np.zeros(episode.num_agents, dtype=bool)
         self._distances = measure_distances(self._fields, self._sim.positions, None)
         self.agents = list(self.possible_agents)
+        self._channel = self._new_channel()
         observations = self._observe(np.ones(episode.num_agents, dtype=bool))
         infos = {a: self._info(i, False) for i, a in enumerate(self.possible_agents)}
         return observations, infos
@@ -175,13 +203,18 @@ class MainParallelEnv(ParallelEnv):
         live = [a for a in self.possible_agents if a in self.agents]
         n = len(self.possible_agents)
         chosen = np.full(n, -1, dtype=np.int64)
+        sent = {}
         for a in live:
             if a not in actions:
                 raise InputError(f"no action for live agent {a}; give one action per agent in env.agents")
-            value = int(np.asarray(actions[a]).item())
+            action, message = self._split_action(a, actions[a])
+            value = int(np.asarray(action).item())
             if not 0 <= value <= 3:
                 raise InputError(f"action {value} of {a} is outside 0..3")
             chosen[self.possible_agents.index(a)] = value
+            sent[self.possible_agents.index(a)] = message
+        if self._channel is not None:
+            self._channel.commit(sent)
         acting = chosen >= 0
         before = self._distances
         outcome = self._sim.step([None if a in (-1, FOUND) else int(a) for a in chosen])
@@ -203,6 +236,34 @@ class MainParallelEnv(ParallelEnv):
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         return observations, rewards, terminations, truncations, infos
 
+    def _new_channel(self) -> Any:
+        if not self.message_floats:
+            return None
+        from .evaluation.channel import Channel
+
+        return Channel(tuple(self.possible_agents), self.message_floats)
+
+    def _split_action(self, agent: str, given: Any) -> tuple[Any, Any]:
+        """(action, checked message or None) of one agent's entry in `step`'s actions."""
+        if not self.message_floats:
+            return given, None
+        from .evaluation.channel import MessageError, check_message, describe_message
+
+        if isinstance(given, dict) and "action" in given:
+            to = int(np.asarray(given.get("to", -1)).item())
+            data = given.get("message")
+            action, message = given["action"], data if to < 0 or data is None else {"to": to, "data": data}
+        elif isinstance(given, tuple | list) and len(given) == 2:
+            action, message = given
+        else:
+            action, message = given, None
+        try:
+            checked = check_message(agent, describe_message(message), tuple(self.possible_agents),
+                                    self.message_floats)
+        except MessageError as exc:
+            raise InputError(exc.reason) from None
+        return action, checked
+
     def _rewards(self, acting: np.ndarray, chosen: np.ndarray, before: np.ndarray) -> dict[str, float]:
         rs, judge = self.reward_settings, self._judge
         out = {}
@@ -220,8 +281,12 @@ class MainParallelEnv(ParallelEnv):
         rgb, depth = self._sim.observe()
         self._last_rgb = rgb
         positions, yaws = self._sim.positions, self._sim.yaws
-        return build_observations(self._episode, self._loop, which, rgb, depth, positions, yaws, self._collided,
-                                  self._targets)
+        out = build_observations(self._episode, self._loop, which, rgb, depth, positions, yaws, self._collided,
+                                 self._targets)
+        if self._channel is not None:
+            for a, obs in out.items():
+                obs["inbox"] = self._channel.inbox(self.possible_agents.index(a))
+        return out
 
     def _info(self, i: int, over: bool) -> dict[str, Any]:
         judge = self._judge

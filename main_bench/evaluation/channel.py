@@ -5,8 +5,8 @@ the policy's process) or as an in-process baseline returned it. Out: each agent'
 (`protocol.inbox_space`) and the accounting (messages and bytes per agent, per step and per episode).
 
 Rules: a message is a 1-D vector of at most `message_floats` real numbers, sent as float32 (4 bytes a value);
-None or an empty vector sends nothing. `{"to": agent_id, "data": vector}` goes to one teammate, anything else
-to every teammate. Messages sent at step t are in the recipients' inboxes at step t + 1 (one-step delay);
+None or an empty vector sends nothing. `{"to": agent_id or index, "data": vector}` goes to one teammate (to
+oneself: to nobody, bytes still counted), anything else to every teammate. Messages sent at step t are in the recipients' inboxes at step t + 1 (one-step delay);
 agents that are done receive nothing. A broadcast counts once: bytes are what the sender sent. A message that
 is too long, not finite, of the wrong type or addressed to an unknown agent fails the episode
 (`invalid_message: ...`, naming the agent and the value). In `silent` mode (`message_floats` 0) any message
@@ -130,9 +130,9 @@ def _recipient(sender: str, to: Any, ids: tuple[str, ...]) -> int:
     if to is None:
         return BROADCAST
     index = ids.index(to) if isinstance(to, str) and to in ids else (to if isinstance(to, int) else None)
-    if index is None or not 0 <= index < len(ids) or ids[index] == sender:
-        raise MessageError(f"invalid_message: {sender} addressed {to!r}, which is not a teammate (team: "
-                           f"{', '.join(a for a in ids if a != sender)})")
+    if index is None or not 0 <= index < len(ids):
+        raise MessageError(f"invalid_message: {sender} addressed {to!r}, which is not in the team "
+                           f"({', '.join(ids)})")
     return int(index)
 
 
