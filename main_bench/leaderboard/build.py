@@ -27,20 +27,27 @@ class LeaderboardSettings:
 
 
 def build_sections(subs: list[LoadedSubmission], settings: LeaderboardSettings) -> list[Section]:
-    """Group submissions by data set and sensor track and compute each group's tables and plots."""
+    """Group submissions by data set, sensor track and coordination mode and compute each group's tables and
+    plots."""
+    from ..evaluation.protocol import MODES
+
     sections: list[Section] = []
     for group in group_by_dataset(subs, settings.allow_mixed):
-        by_track: dict[str, list[LoadedSubmission]] = {}
+        by_track: dict[tuple[str, str], list[LoadedSubmission]] = {}
         for s in group:
-            by_track.setdefault(s.submission.sensor_track, []).append(s)
-        for sensor_track, members in by_track.items():
+            by_track.setdefault((s.submission.sensor_track, s.submission.mode), []).append(s)
+        sensors = list(dict.fromkeys(k[0] for k in by_track))  # in order of first appearance
+        order = sorted(by_track, key=lambda k: (sensors.index(k[0]), MODES.index(k[1]) if k[1] in MODES else 99))
+        for sensor_track, mode in order:
+            members = by_track[(sensor_track, mode)]
             tracks, t2 = build_tables(members, settings.tables)
             figures = section_figures(members, tracks, settings.tables) if settings.plots else ()
             first = members[0].submission
             sections.append(Section(
                 index=len(sections), manifest_hash=first.manifest_hash, dataset_path=first.dataset_path,
                 sensor_track=sensor_track, submissions=tuple(m.submission for m in members),
-                tracks=tuple(tracks), table2=tuple(t2), figures=tuple(figures), task_rules=dict(first.task_rules)))
+                tracks=tuple(tracks), table2=tuple(t2), figures=tuple(figures), task_rules=dict(first.task_rules),
+                mode=mode))
     return sections
 
 

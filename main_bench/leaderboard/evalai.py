@@ -5,7 +5,7 @@ Shape (schema_version 1)::
     {"schema_version": 1, "toolkit_version": "...", "format": "main-bench-leaderboard/evalai",
      "bootstrap": {"seed": 0, "n_resamples": 2000, "level": 0.95},
      "sections": [{
-        "manifest_hash": "...", "dataset_path": "...", "sensor_track": "...",
+        "manifest_hash": "...", "dataset_path": "...", "sensor_track": "...", "mode": "central|silent|comm",
         "tracks": [{"track": "<split>/<task>/<agents>", "split": ..., "task": ..., "agents": n,
                     "ranking": [{"rank": 1, "method_name": "..."}, ...]}],
         "submissions": [{
@@ -13,7 +13,7 @@ Shape (schema_version 1)::
                                     "links", "date", "baseline", "sandboxed", "results_dir"},
             "result": [{"<split>/<task>/<agents>": {"success": m, "success_ci_low": lo,
                         "success_ci_high": hi, ... (spl, soft_spl, distance_to_goal, steps, collisions),
-                        "episodes": n, "rank": r}}, ...]}]}]}
+                        "bytes_per_agent_step": b or null, "episodes": n, "rank": r}}, ...]}]}]}
 
 `result` is EvalAI's list of one-key dicts (one per challenge phase split; here one per track), each mapping
 metric names to numbers. Rates are fractions (0..1), distances metres, lengths steps; every mean is over team
@@ -61,6 +61,7 @@ def section_json(section: Section) -> dict[str, Any]:
                 values[col] = est.mean
                 values[f"{col}_ci_low"] = est.lo
                 values[f"{col}_ci_high"] = est.hi
+            values["bytes_per_agent_step"] = e.bytes_per_step
             values["episodes"] = e.episodes
             values["rank"] = e.rank
             results[e.submission.name].append({table.key: values})
@@ -68,6 +69,7 @@ def section_json(section: Section) -> dict[str, Any]:
         "manifest_hash": section.manifest_hash,
         "dataset_path": section.dataset_path,
         "sensor_track": section.sensor_track,
+        "mode": section.mode,
         "tracks": tracks,
         "submissions": [{"submission_metadata": _metadata(s), "result": results[s.name]}
                         for s in section.submissions],

@@ -26,6 +26,11 @@ def metric_title(metric: str, title: str) -> str:
     return f"{title} (%)" if metric in PERCENT else title
 
 
+def fmt_bytes(value: float | None) -> str:
+    """Mean message bytes per agent-step as printed: one decimal, or "–" where not measured (central mode)."""
+    return "–" if value is None else f"{value:.1f}"
+
+
 def track_title(split: str, task: str, agents: int) -> str:
     """Human title of a track."""
     return f"{split} · {task}-target · {agents} agents"

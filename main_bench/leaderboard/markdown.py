@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..evaluation.task_rules import describe_rules
-from .format import fmt_estimate, metric_title, track_title
+from .format import fmt_bytes, fmt_estimate, metric_title, track_title
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
 
 
@@ -21,14 +21,16 @@ def _name(sub) -> str:
 
 def track_markdown(table: TrackTable) -> str:
     """One track table: rank, method, each metric as `mean [lo, hi]`, episode count."""
-    head = ["#", "Method"] + [metric_title(c, t) for c, t in TRACK_METRICS] + ["Episodes"]
+    head = ["#", "Method", "Mode"] + [metric_title(c, t) for c, t in TRACK_METRICS] + ["Bytes/agent-step",
+                                                                                     "Episodes"]
     lines = [f"### {track_title(table.split, table.task, table.agents)}", "",
-             "| " + " | ".join(head) + " |", "|" + "|".join(["---:", ":---"] + ["---:"] * (len(head) - 2)) + "|"]
+             "| " + " | ".join(head) + " |", "|" + "|".join(["---:", ":---", ":---"] + ["---:"] * (len(head) - 3)) + "|"]
     for e in table.entries:
-        cells = [str(e.rank), _name(e.submission)]
+        cells = [str(e.rank), _name(e.submission), e.submission.mode]
         for col, _ in TRACK_METRICS:
             mean, ci = fmt_estimate(col, e.metrics[col])
             cells.append(f"{mean} {ci}")
+        cells.append(fmt_bytes(e.bytes_per_step))
         cells.append(str(e.episodes))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -73,9 +75,12 @@ def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]
     out = ["# MAIN benchmark leaderboard", "",
            f"Each cell: team mean over episodes and its {settings.level:.0%} bootstrap confidence interval "
            f"`[low, high]` ({settings.n_resamples} resamples, seed {settings.seed}). Tracks are ranked by team SPL. "
-           "Success, SPL and soft SPL in percent; distance to goal in metres; episode length in steps.", ""]
+           "Success, SPL and soft SPL in percent; distance to goal in metres; episode length in steps. Coordination "
+           "modes are their own sections: `central` (one team policy sees every agent's observation, an upper "
+           "reference), `silent` (one policy per agent, no messages), `comm` (one policy per agent, messages "
+           "counted); bytes/agent-step is the mean message size per agent and step (– where not measured).", ""]
     if len(sections) > 1:
-        out += ["**These submissions were scored on different data sets or sensor tracks; each section is "
+        out += ["**These submissions were scored on different data sets, sensor tracks or modes; each section is "
                 "ranked on its own and numbers must not be compared across sections.**", ""]
     for sec in sections:
         out += [f"## {md_escape(sec.title)}", "",

@@ -12,6 +12,13 @@ import pandas as pd
 from .submissions import Submission
 from .tables import Table2, TrackTable
 
+#: Section headings of the coordination modes (`evaluation.protocol.MODES`).
+MODE_TITLES = {
+    "central": "central mode (one team policy sees every agent: an upper reference)",
+    "silent": "silent mode (one policy per agent, no messages)",
+    "comm": "comm mode (one policy per agent, measured messages)",
+}
+
 #: Version of leaderboard.json; bumped when a key changes meaning or goes away.
 LEADERBOARD_SCHEMA_VERSION = 1
 
@@ -44,12 +51,13 @@ class Section:
     figures: tuple[Figure, ...]
     #: The task rules of the data set (summary.json `task_rules` of the section's submissions).
     task_rules: Mapping[str, Any] = field(default_factory=dict, compare=False)
+    mode: str = "central"
 
     @property
     def title(self) -> str:
-        """Heading naming the data set (short hash) and the sensor track."""
+        """Heading naming the data set (short hash), the sensor track and the coordination mode."""
         track = f" · {self.sensor_track} track" if self.sensor_track else ""
-        return f"Data set {self.manifest_hash[:12]}{track}"
+        return f"Data set {self.manifest_hash[:12]}{track} · {MODE_TITLES.get(self.mode, self.mode + ' mode')}"
 
 
 @dataclass(frozen=True)

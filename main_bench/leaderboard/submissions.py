@@ -35,6 +35,8 @@ class Submission:
     sandboxed: bool = True
     #: The task rules the submission was scored under (summary.json `task_rules`).
     task_rules: Mapping[str, Any] = field(default_factory=dict, compare=False)
+    mode: str = "central"
+    message_floats: int = 0
 
     @property
     def marks(self) -> tuple[str, ...]:
@@ -77,6 +79,8 @@ def submission_from_results(results: Results) -> Submission:
         links = (links,)
     settings = summary.get("settings") or {}
     sensor_track = _text(settings.get("track") if isinstance(settings, dict) else "")
+    mode = _text(settings.get("mode") if isinstance(settings, dict) else "") or "central"  # older results: central
+    floats = settings.get("message_floats") if isinstance(settings, dict) else 0
     return Submission(
         name=_text(meta.get("name")).strip(),
         description=_text(meta.get("description")),
@@ -89,6 +93,8 @@ def submission_from_results(results: Results) -> Submission:
         sensor_track=sensor_track,
         sandboxed=not (isinstance(settings, dict) and settings.get("sandbox") is False),
         task_rules=dict(summary.get("task_rules") or {}) if isinstance(summary.get("task_rules"), dict) else {},
+        mode=mode,
+        message_floats=int(floats) if isinstance(floats, int) and not isinstance(floats, bool) else 0,
     )
 
 

@@ -59,6 +59,7 @@ class TrackEntry:
     rank: int
     episodes: int
     metrics: Mapping[str, Estimate]
+    bytes_per_step: float | None = None  # mean message bytes per agent-step; None in central mode (not measured)
 
 
 @dataclass(frozen=True)
@@ -116,13 +117,20 @@ def _metrics_of(team: pd.DataFrame, columns: tuple[tuple[str, str], ...], settin
 def track_table(subs: list[LoadedSubmission], split: str, task: str, agents: int,
                 settings: TableSettings) -> TrackTable:
     """Rank the submissions scored on one track by team SPL (then success, then name); ties share a rank."""
+    from ..evaluation.channel import communication_stats
+
     rows = []
+    talk: dict[str, float | None] = {}
     for s in subs:
         t = s.teams
         team = t[(t["split"] == split) & (t["task"] == task) & (t["agents"] == agents)]
         if team.empty:
             continue
         rows.append((s.submission, len(team), _metrics_of(team, TRACK_METRICS, settings)))
+        r = s.records
+        mine = r[(r["split"] == split) & (r["task"] == task) & (r["agents"] == agents)]
+        talk[s.submission.name] = (None if s.submission.mode == "central"
+                                   else float(communication_stats(mine)["bytes_per_agent_step"]))
     rows.sort(key=lambda r: (-r[2]["spl"].mean, -r[2]["success"].mean, r[0].name))
     entries: list[TrackEntry] = []
     for i, (sub, n, metrics) in enumerate(rows):
@@ -132,7 +140,7 @@ def track_table(subs: list[LoadedSubmission], split: str, task: str, agents: int
             if (prev.metrics["spl"].mean, prev.metrics["success"].mean) == (metrics["spl"].mean,
                                                                             metrics["success"].mean):
                 rank = prev.rank
-        entries.append(TrackEntry(sub, rank, n, MappingProxyType(metrics)))
+        entries.append(TrackEntry(sub, rank, n, MappingProxyType(metrics), talk[sub.name]))
     return TrackTable(split, task, agents, tuple(entries))
 
 

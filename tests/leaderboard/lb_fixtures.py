@@ -87,10 +87,13 @@ def read_episode_rows(dataset: Path) -> list[dict]:
 
 def make_results(root: Path, dataset: Path, name: str, skill: float, *, baseline: bool = False,
                  manifest_hash: str = "f" * 64, seed: int = 0, description: str = "fixture policy",
-                 links: tuple[str, ...] = ("https://example.org/method",)) -> Path:
+                 links: tuple[str, ...] = ("https://example.org/method",), mode: str = "",
+                 bytes_per_step: int = 0) -> Path:
     """A results directory for `dataset`: per-agent and team records plus straight-line trajectories.
 
     `skill` is the chance that an agent reaches its target; failed agents stop halfway and get success 0.
+    `mode` is recorded in the settings (empty: none recorded, as in results older than the modes); with
+    `bytes_per_step` every agent sends a message of that many bytes each step.
     """
     rng = np.random.default_rng(seed)
     by_part: dict[tuple, list] = {}
@@ -112,13 +115,17 @@ def make_results(root: Path, dataset: Path, name: str, skill: float, *, baseline
         rows = [dict(episode_id=ep["episode_id"], scene_id=ep["scene_id"], agent_index=i, success=float(ok[i]),
                      spl=float(spl[i]), soft_spl=float(soft[i]), distance_to_goal=float(dist[i]),
                      path_length=float(path[i]), steps=int(steps[i]), collisions=int(coll[i]),
-                     geodesic_distance=float(geo[i]), called_found=bool(ok[i]), failure="") for i in range(n)]
+                     geodesic_distance=float(geo[i]), called_found=bool(ok[i]), failure="",
+                     messages=int(steps[i]) if bytes_per_step else 0,
+                     message_bytes=int(steps[i]) * bytes_per_step) for i in range(n)]
         team_ok = float(ok.any() if ep["task"] == "shared" else ok.all())
         rows.append(dict(episode_id=ep["episode_id"], scene_id=ep["scene_id"], agent_index=TEAM, success=team_ok,
                          spl=float(team_ok * rng.uniform(0.3, 1.0)), soft_spl=float(rng.uniform(0, 1)),
                          distance_to_goal=float(dist.min()), path_length=float(path.sum()),
                          steps=int(steps.max()), collisions=int(coll.sum()), geodesic_distance=float(geo.min()),
-                         called_found=bool(ok.any()), failure=""))
+                         called_found=bool(ok.any()), failure="",
+                         messages=int(steps.sum()) if bytes_per_step else 0,
+                         message_bytes=int(steps.sum()) * bytes_per_step))
         by_part.setdefault(key, []).extend(rows)
         T = int(steps.max())
         for i in range(n):
@@ -127,7 +134,9 @@ def make_results(root: Path, dataset: Path, name: str, skill: float, *, baseline
                 p = starts[i] + a * (targets[i] - starts[i])
                 traj_part.setdefault(key, []).append(dict(
                     episode_id=ep["episode_id"], step=t, agent_index=i, action=-1 if t == 0 else 1,
-                    x=p[0], y=p[1], z=p[2], yaw=0.0, collided=False, distance_to_goal=0.0))
+                    x=p[0], y=p[1], z=p[2], yaw=0.0, collided=False, distance_to_goal=0.0,
+                    message_bytes=bytes_per_step if 0 < t <= steps[i] else 0,
+                    message_to=-1 if bytes_per_step and 0 < t <= steps[i] else -2))
     written = []
     for (split, task, n), rows in by_part.items():
         written.append(write_part(root, "records", split, task, n, 0,
@@ -139,7 +148,7 @@ def make_results(root: Path, dataset: Path, name: str, skill: float, *, baseline
                "submission": {"name": name, "description": description, "links": list(links),
                               "date": "2026-11-01", "baseline": baseline},
                "dataset": {"path": str(dataset), "manifest_hash": manifest_hash},
-               "settings": {}, "counts": {}, "tracks": {}}
+               "settings": {"mode": mode} if mode else {}, "counts": {}, "tracks": {}}
     (root / "summary.json").write_text(json.dumps(summary))
     return root
 
