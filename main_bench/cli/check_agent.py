@@ -31,10 +31,14 @@ def check_agent(
     memory_mb: int = typer.Option(4096, "--memory-mb", help="Address-space limit of the policy process (MB)."),
     no_sandbox: bool = typer.Option(False, "--no-sandbox", help="Run the policy without the bubblewrap sandbox "
                                     "(the isolation check then fails)."),
+    mode: str = typer.Option("central", "--mode", help="central (a team policy) or silent / comm (an agent "
+                             "policy: one process per agent)."),
+    message_floats: int = typer.Option(32, "--message-floats", help="comm mode: largest message (float32 values)."),
     as_json: bool = JsonOption,
 ) -> None:
-    """Check that a submission loads, follows the team policy protocol, answers with valid actions for exactly
-    the acting agents, is deterministic for a seed and stays within the time limit, in its own process."""
+    """Check that a submission loads, follows the team policy protocol (or, with --mode silent/comm, the agent
+    policy protocol), answers with valid actions (and messages) for exactly the acting agents, is deterministic
+    for a seed and stays within the time limit, in its own process (one per agent for agent policies)."""
     from ..evaluation.check import CheckSettings, check_policy
     from ..evaluation.isolation import Limits
     from ..evaluation.sandbox import SandboxSettings, require_sandbox
@@ -45,7 +49,8 @@ def check_agent(
         require_sandbox()
     limits = Limits(step_seconds=step_seconds, memory_mb=memory_mb)
     settings = CheckSettings(agents=agents, task=task, track=track, goal=goal, steps=steps, seed=seed,  # type: ignore[arg-type]
-                             limits=limits, sandbox=SandboxSettings(enabled=not no_sandbox))
+                             limits=limits, sandbox=SandboxSettings(enabled=not no_sandbox), mode=mode,
+                             message_floats=message_floats)
     report = check_policy(policy_spec, settings)
     payload = report.to_dict()
     payload["spec"] = spec
@@ -56,7 +61,7 @@ def check_agent(
 
 def _render(d: dict[str, Any]) -> str:
     s = d["settings"]
-    lines = [f"check-agent {d['spec']}  ({s['agents']} agents, {s['task']} target, {s['track']} track, "
+    lines = [f"check-agent {d['spec']}  ({s['mode']} mode, {s['agents']} agents, {s['task']} target, {s['track']} track, "
              f"{s['goal']} goals, {s['steps']} steps, seed {s['seed']})"]
     for c in d["checks"]:
         lines.append(f"  {c['status'].upper():<5} {c['name']:<14} {c['message']}")

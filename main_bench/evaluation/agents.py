@@ -43,41 +43,41 @@ class AgentEndpoint(Protocol):
 class ProcessEndpoint:
     """A submitted `AgentPolicy` in its own `PolicyProcess`; `PolicyError`s become `EpisodeFailure`s."""
 
-    def __init__(self, spec: Any, limits: Any, seed: int) -> None:
+    def __init__(self, spec: Any, limits: Any, seed: int, sandbox: Any = None) -> None:
         from .isolation import PolicyProcess
 
         self.agent_id = ""
-        self._proc = PolicyProcess(spec, limits, seed, role="agent")
+        self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent")
 
     def send_reset(self, info: AgentInfo, world: Any) -> None:
         self.agent_id = info.agent_id
         with _as_failure():
-            self._proc.send_reset(info)
+            self.process.send_reset(info)
 
     def receive_reset(self) -> None:
         with _as_failure():
-            self._proc.receive()
+            self.process.receive()
 
     def send_act(self, observation: dict[str, Any], inbox: dict[str, np.ndarray]) -> None:
         with _as_failure():
-            self._proc.send_act((observation, inbox))
+            self.process.send_act((observation, inbox))
 
     def receive_act(self) -> tuple[int, Any]:
         from .isolation import validate_agent_answer
 
         with _as_failure():
-            return validate_agent_answer(self._proc.receive(), self.agent_id)
+            return validate_agent_answer(self.process.receive(), self.agent_id)
 
     def drain(self) -> None:
         """Collect an unanswered request's reply (ignoring its errors) so the next request pairs up."""
         from .isolation import PolicyError
 
-        if self._proc.waiting:
+        if self.process.waiting:
             with contextlib.suppress(PolicyError):
-                self._proc.receive()
+                self.process.receive()
 
     def close(self) -> None:
-        self._proc.close()
+        self.process.close()
 
 
 @contextlib.contextmanager

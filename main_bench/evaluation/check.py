@@ -19,7 +19,15 @@ from ..errors import InputError, SubmissionError
 from ..scenes.objects import KNOWN_CATEGORIES
 from .isolation import Limits, PolicyError, PolicyProcess
 from .isolation_check import Trap
-from .protocol import TRACKS, EpisodeInfo, TargetInfo, agent_ids, observation_space
+from .protocol import (
+    DEFAULT_MESSAGE_FLOATS,
+    MODES,
+    TRACKS,
+    EpisodeInfo,
+    TargetInfo,
+    agent_ids,
+    observation_space,
+)
 from .sandbox import SandboxSettings
 from .submission import PolicySpec, ProtocolError, parse_spec
 
@@ -45,6 +53,8 @@ class CheckSettings:
     max_steps: int = 500
     limits: Limits = field(default_factory=Limits)
     sandbox: SandboxSettings = field(default_factory=SandboxSettings)
+    mode: str = "central"
+    message_floats: int = DEFAULT_MESSAGE_FLOATS
 
     def __post_init__(self) -> None:
         if not (isinstance(self.agents, int) and 1 <= self.agents <= 16):
@@ -57,6 +67,8 @@ class CheckSettings:
             raise InputError(f"--goal must be object or point, got {self.goal!r}")
         if not (isinstance(self.steps, int) and self.steps >= 2):
             raise InputError(f"--steps must be an integer of at least 2, got {self.steps!r}")
+        if self.mode not in MODES:
+            raise InputError(f"--mode must be one of {', '.join(MODES)}, got {self.mode!r}")
         if self.width < 1 or self.height < 1 or not self.max_depth > 0:
             raise InputError(f"camera {self.width}x{self.height}, max depth {self.max_depth} m: all must be positive")
 
@@ -176,7 +188,7 @@ def _run(spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo, script: l
     sandbox = trap.sandbox_for(settings.sandbox, str(spec)) if trap is not None else settings.sandbox
     try:
         try:
-            process = PolicyProcess(spec, settings.limits, settings.seed, sandbox)
+            process = _Submission(spec, settings, sandbox)
         finally:
             if trap is not None:
                 results["isolation"] = _isolation(trap.verdict(None, spec.root), settings.sandbox, skip=True)
@@ -192,8 +204,10 @@ def _run(spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo, script: l
             results["deterministic"] = CheckResult("deterministic", "fail", f"second load failed: {exc}")
         return None
     with process:
-        put("loads", "pass", f"loaded {process.policy_name} in {process.load_seconds:.2f} s in its own process")
-        put("protocol", "pass", "has reset(info) and act(observations)")
+        put("loads", "pass", f"loaded {process.policy_name} in {process.load_seconds:.2f} s in its own process"
+            + (f" (one per agent: {len(process.pids)})" if settings.mode != "central" else ""))
+        put("protocol", "pass", "has reset(info) and act(observation, inbox)" if settings.mode != "central"
+            else "has reset(info) and act(observations)")
         try:
             return _play(process, spec, settings, info, script, put, results, record, trap)
         finally:
@@ -202,10 +216,10 @@ def _run(spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo, script: l
                 results["isolation"] = _isolation(trap.verdict(None, spec.root), settings.sandbox, skip=True)
 
 
-def _play(process: PolicyProcess, spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo,
+def _play(process: _Submission, spec: PolicySpec, settings: CheckSettings, info: EpisodeInfo,
           script: list[dict[str, dict]], put: Any, results: dict[str, CheckResult], record: bool,
           trap: Trap | None) -> list[dict[str, int]] | None:
-    pid = process.pid
+    pids = process.pids
     try:
         process.reset(info)
     except PolicyError as exc:
@@ -249,12 +263,90 @@ def _play(process: PolicyProcess, spec: PolicySpec, settings: CheckSettings, inf
             reply = process.probe(trap.request(spec.root))
     process.close()
     if trap is not None:
-        gone = pid is not None and pid != os.getpid() and not _pid_alive(pid)
+        alive = [p for p in pids if p is None or p == os.getpid() or _pid_alive(p)]
         verdict = trap.verdict(reply, spec.root)
         results["isolation"] = _isolation(verdict, settings.sandbox, "" if reply is not None else
                                           "the escape probe did not answer",
-                                          "" if gone else f"process {pid} still running after close")
+                                          "" if not alive else "process "
+                                          f"{', '.join(map(str, alive))} still running after close")
     return actions
+
+
+class _Submission:
+    """The submission as the checks drive it: one `PolicyProcess` (central mode) or one per agent (silent, comm;
+    played by `DecentralizedTeam`, whose episode failures are reported as `PolicyError`s). The escape probe runs
+    in the first agent's process (every agent's process gets the same sandbox)."""
+
+    def __init__(self, spec: PolicySpec, settings: CheckSettings, sandbox: SandboxSettings) -> None:
+        from .agents import DecentralizedTeam, ProcessEndpoint
+
+        self._team: DecentralizedTeam | None = None
+        if settings.mode == "central":
+            self._procs = [PolicyProcess(spec, settings.limits, settings.seed, sandbox)]
+            return
+        team = DecentralizedTeam(lambda i: ProcessEndpoint(spec, settings.limits, settings.seed, sandbox),
+                                 settings.mode, settings.message_floats)
+        team.start(settings.agents)  # loads every agent's process now: a load failure is the `loads` check's
+        self._procs = [e.process for e in team.endpoints]
+        self._team = team
+
+    @property
+    def policy_name(self) -> str:
+        return self._procs[0].policy_name
+
+    @property
+    def load_seconds(self) -> float:
+        return max(p.load_seconds for p in self._procs)
+
+    @property
+    def pids(self) -> list[int | None]:
+        return [p.pid for p in self._procs]
+
+    def reset(self, info: EpisodeInfo) -> None:
+        self._driver().reset(info)
+
+    def act(self, observations: dict[str, dict[str, Any]]) -> dict[str, int]:
+        return self._driver().act(observations)
+
+    def probe(self, request: dict[str, Any]) -> dict[str, Any]:
+        return self._procs[0].probe(request)
+
+    def _driver(self) -> Any:
+        return self._procs[0] if self._team is None else _FailuresAsErrors(self._team)
+
+    def close(self) -> None:
+        if self._team is not None:
+            self._team.close()
+        for p in self._procs:
+            p.close()
+
+    def __enter__(self) -> _Submission:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class _FailuresAsErrors:
+    """A `DecentralizedTeam` whose `EpisodeFailure`s are raised as the `PolicyError`s the checks expect."""
+
+    def __init__(self, team: Any) -> None:
+        self._team = team
+
+    def reset(self, info: EpisodeInfo) -> None:
+        self._call(self._team.reset, info)
+
+    def act(self, observations: dict[str, dict[str, Any]]) -> dict[str, int]:
+        return self._call(self._team.act, observations)
+
+    @staticmethod
+    def _call(method: Any, argument: Any) -> Any:
+        from .episode_loop import EpisodeFailure
+
+        try:
+            return method(argument)
+        except EpisodeFailure as exc:
+            raise PolicyError(exc.reason) from None
 
 
 def _isolation(verdict: Any, sandbox: SandboxSettings, *problems: str, skip: bool = False) -> CheckResult:

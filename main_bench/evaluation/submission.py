@@ -178,8 +178,8 @@ def check_protocol(policy: Any, spec: PolicySpec | str, role: str = "team") -> A
                                                "or comm" if role == "team" else "; a team policy (act(observations)) "
                                                "runs with --mode central")
             raise ProtocolError(
-                f"policy spec {spec}: {type(policy).__name__}.{method} does not accept {wanted} positional "
-                f"argument{'s' if wanted > 1 else ''}; define {method}(self, "
+                f"policy spec {spec}: {type(policy).__name__}.{method} does not accept {('one', 'two')[wanted - 1]} "
+                f"positional argument{'s' if wanted > 1 else ''}; define {method}(self, "
                 f"{'info' if method == 'reset' else act_names}){hint}"
             )
     return policy

@@ -1,19 +1,23 @@
-"""`baseline:comm`: an example torch team policy with recurrent communication (untrained weights).
+"""`baseline:comm`: an example torch agent policy that talks (comm mode), with untrained weights.
 
-After the MAIN paper's recurrent communication model: every agent encodes its own egocentric RGB-D view with a
-small CNN, adds its target (category embedding, or the point goal), its contact bit and its previous action,
-and the mean of the messages the *other* acting agents sent on the previous step; a GRU cell updates its
-memory, and two heads give the action logits and the message it sends next. One network is shared by all
-agents (parameter sharing).
+After the MAIN paper's recurrent communication model: the agent encodes its own egocentric RGB-D view with a
+small CNN, adds its target (category embedding, or the point goal), its contact bit, its previous action and
+the mean of the messages in its inbox; a GRU cell updates its memory; an actor head gives the action logits and
+a critic head a value. Its message is its GRU feature: the new memory (32 floats, 128 bytes), broadcast to its
+teammates, who read it on the next step. Every agent runs its own instance; all instances load the same weights.
 
-It is a submission like any other: `main-bench evaluate --agent baseline:comm` loads this directory in the
-isolated policy process, and `make_policy(root, seed)` reads `weights.pt` (a torch `state_dict`) from it.
-The shipped weights are UNTRAINED (a seeded initialisation written by `write_untrained_weights`): the policy
-shows the architecture, the protocol and weight loading, and scores near zero. Train it (for example with
-`main_bench.env`) and save `model.state_dict()` over `weights.pt` to make it useful.
+`CommNet.forward(obs, inbox, hidden) -> (logits, value, message, hidden)` works on a batch of K agents (see
+`batch_observations` and `batch_inboxes`), so a trainer (for example on `main_bench.env` with
+`message_floats=32`) can step a whole team, or many, in one call; no gradient flows through the messages.
 
-Actions are sampled from the softmax of the logits with a torch generator seeded by `EpisodeInfo.seed`, so a
-run is deterministic for a given evaluation seed.
+It is a submission like any other: `main-bench evaluate --agent baseline:comm --mode comm` loads this directory
+in one isolated process per agent, and `make_policy(root, seed)` reads `weights.pt` (a torch `state_dict`) from
+it. The shipped weights are UNTRAINED (a seeded initialisation written by `write_untrained_weights`): the policy
+shows the architecture, the protocol and weight loading, and scores near zero. Train it and save
+`model.state_dict()` over `weights.pt` to make it useful.
+
+Actions are sampled from the softmax of the logits with a torch generator seeded by `AgentInfo.seed`, so a run
+is deterministic for a given evaluation seed.
 """
 
 from __future__ import annotations
@@ -30,13 +34,12 @@ WEIGHTS_FILE = "weights.pt"
 NUM_ACTIONS = 4
 NUM_CATEGORIES = 64  # embedding rows; category ids beyond it share the last row
 FEATURES = 64
-HIDDEN = 64
-MESSAGE = 16
+HIDDEN = 32  # also the message length: the message is the GRU feature
 MAX_DEPTH = 10.0  # metres; depth is scaled to [0, 1] by it
 
 
 class CommNet(nn.Module):
-    """Per-agent CNN encoder + GRU cell + action and message heads, shared by every agent of the team."""
+    """CNN encoder + GRU cell + actor, critic; the message is the new GRU state."""
 
     def __init__(self) -> None:
         super().__init__()
@@ -49,23 +52,53 @@ class CommNet(nn.Module):
         self.category = nn.Embedding(NUM_CATEGORIES, 16)
         self.point = nn.Linear(3, 16)
         self.prev_action = nn.Embedding(NUM_ACTIONS + 1, 8)  # row 4: no previous action
-        self.gru = nn.GRUCell(FEATURES + 16 + 8 + 1 + MESSAGE, HIDDEN)
+        self.gru = nn.GRUCell(FEATURES + 16 + 8 + 1 + HIDDEN, HIDDEN)
         self.actor = nn.Linear(HIDDEN, NUM_ACTIONS)
-        self.speaker = nn.Sequential(nn.Linear(HIDDEN, MESSAGE), nn.Tanh())
+        self.critic = nn.Linear(HIDDEN, 1)
 
-    def forward(self, rgbd: torch.Tensor, target: torch.Tensor, is_point: torch.Tensor, contact: torch.Tensor,
-                prev_action: torch.Tensor, inbox: torch.Tensor, hidden: torch.Tensor,
-                ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """One step for K agents: rgbd (K, 4, H, W) in [0, 1]; target (K, 3) (category id in column 0, or the
-        point goal in metres); is_point (K,) bool; contact (K,); prev_action (K,) long; inbox (K, MESSAGE) the
-        mean of the others' messages; hidden (K, HIDDEN). Returns (logits (K, 4), message (K, MESSAGE),
-        hidden (K, HIDDEN))."""
-        seen = self.encoder(rgbd)
-        cat = self.category(target[:, 0].long().clamp(0, NUM_CATEGORIES - 1))
-        goal = torch.where(is_point[:, None], self.point(target), cat)
-        x = torch.cat([seen, goal, self.prev_action(prev_action), contact[:, None], inbox], dim=1)
+    def forward(self, obs: dict[str, torch.Tensor], inbox: dict[str, torch.Tensor], hidden: torch.Tensor,
+                ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+        """One step of K agents.
+
+        `obs` (`batch_observations`): rgbd (K, 4, H, W) in [0, 1], target (K, 3) (category id in column 0, or
+        the point goal in metres), is_point (K,) bool, contact (K,), prev_action (K,) long. `inbox`
+        (`batch_inboxes`): messages (K, N, HIDDEN), lengths (K, N). `hidden` (K, HIDDEN). Returns logits (K, 4),
+        value (K,), message (K, HIDDEN) (detached: no gradient from receiver to sender) and hidden (K, HIDDEN).
+        """
+        seen = self.encoder(obs["rgbd"])
+        cat = self.category(obs["target"][:, 0].long().clamp(0, NUM_CATEGORIES - 1))
+        goal = torch.where(obs["is_point"][:, None], self.point(obs["target"]), cat)
+        heard = (inbox["lengths"] > 0).to(hidden.dtype)  # (K, N)
+        mean = (inbox["messages"] * heard[:, :, None]).sum(dim=1) / heard.sum(dim=1, keepdim=True).clamp(min=1.0)
+        x = torch.cat([seen, goal, self.prev_action(obs["prev_action"]), obs["contact"][:, None], mean], dim=1)
         hidden = self.gru(x, hidden)
-        return self.actor(hidden), self.speaker(hidden), hidden
+        return self.actor(hidden), self.critic(hidden)[:, 0], hidden.detach(), hidden
+
+
+def batch_observations(observations: list[dict[str, Any]], prev_actions: list[int]) -> dict[str, torch.Tensor]:
+    """The `obs` argument of `CommNet.forward` from K observations (`protocol.observation_space`) and the
+    agents' previous actions (4: none yet)."""
+    target, is_point = zip(*(_target(o["target"]) for o in observations), strict=True)
+    return {
+        "rgbd": torch.stack([_rgbd(o) for o in observations]),
+        "target": torch.stack(target),
+        "is_point": torch.tensor(is_point),
+        "contact": torch.tensor([float(o.get("contact", 0)) for o in observations]),
+        "prev_action": torch.tensor(prev_actions, dtype=torch.long),
+    }
+
+
+def batch_inboxes(inboxes: list[dict[str, np.ndarray]]) -> dict[str, torch.Tensor]:
+    """The `inbox` argument of `CommNet.forward` from K inboxes (`protocol.inbox_space`); messages are cut or
+    zero-padded to HIDDEN values."""
+    messages = []
+    for box in inboxes:
+        m = np.zeros((box["messages"].shape[0], HIDDEN), dtype=np.float32)
+        width = min(HIDDEN, box["messages"].shape[1])
+        m[:, :width] = box["messages"][:, :width]
+        messages.append(torch.from_numpy(m))
+    return {"messages": torch.stack(messages),
+            "lengths": torch.stack([torch.as_tensor(np.asarray(b["lengths"], dtype=np.int64)) for b in inboxes])}
 
 
 def write_untrained_weights(path: str | Path, seed: int = 0) -> Path:
@@ -76,53 +109,35 @@ def write_untrained_weights(path: str | Path, seed: int = 0) -> Path:
     return path
 
 
-class CommTeamPolicy:
-    """The team policy: batches the acting agents through `CommNet`, one message round per step."""
+class CommAgent:
+    """One agent: `act(observation, inbox) -> (action, message)` with the GRU feature as its message."""
 
     def __init__(self, net: CommNet, seed: int = 0) -> None:
         self.net = net.eval()
         self.seed = int(seed)
         self._gen = torch.Generator().manual_seed(self.seed)
-        self._hidden: dict[str, torch.Tensor] = {}
-        self._messages: dict[str, torch.Tensor] = {}
-        self._prev: dict[str, int] = {}
+        self._hidden = torch.zeros(1, HIDDEN)
+        self._prev = NUM_ACTIONS
+        self._floats = HIDDEN
 
     def reset(self, info: Any) -> None:
-        """New episode: clear memories and messages, seed the sampler from the episode seed."""
+        """New episode: clear the memory, seed the sampler from this agent's episode seed."""
         self._gen = torch.Generator().manual_seed((self.seed * 1_000_003 + int(info.seed)) % (2**63))
-        self._hidden = {a: torch.zeros(HIDDEN) for a in info.agent_ids}
-        self._messages = {}
-        self._prev = {a: NUM_ACTIONS for a in info.agent_ids}
+        self._hidden = torch.zeros(1, HIDDEN)
+        self._prev = NUM_ACTIONS
+        self._floats = min(HIDDEN, int(info.message_floats))
 
     @torch.no_grad()
-    def act(self, observations: dict[str, dict[str, Any]]) -> dict[str, int]:
-        """Sample one action per acting agent; messages are exchanged among the acting agents."""
-        ids = sorted(observations)
-        if not ids:
-            return {}
-        rgbd = torch.stack([_rgbd(observations[a]) for a in ids])
-        target, is_point = zip(*(_target(observations[a]["target"]) for a in ids), strict=True)
-        contact = torch.tensor([float(observations[a].get("contact", 0)) for a in ids])
-        prev = torch.tensor([self._prev.get(a, NUM_ACTIONS) for a in ids], dtype=torch.long)
-        inbox = torch.stack([self._inbox(a, ids) for a in ids])
-        hidden = torch.stack([self._hidden.get(a, torch.zeros(HIDDEN)) for a in ids])
-        inputs = (rgbd, torch.stack(target), torch.tensor(is_point), contact, prev, inbox, hidden)
+    def act(self, observation: dict[str, Any], inbox: dict[str, np.ndarray]) -> tuple[int, np.ndarray | None]:
+        """Sample an action; send the new GRU state (cut to the channel's size; nothing in silent mode)."""
         device = next(self.net.parameters()).device
-        # Forward pass on the net's device; state and sampling stay on the CPU (seeded CPU generator).
-        logits, message, hidden = (t.cpu() for t in self.net(*(t.to(device) for t in inputs)))
-        chosen = torch.multinomial(torch.softmax(logits, dim=1), 1, generator=self._gen)[:, 0]
-        out = {}
-        for k, a in enumerate(ids):
-            self._hidden[a] = hidden[k]
-            self._messages[a] = message[k]
-            self._prev[a] = int(chosen[k])
-            out[a] = int(chosen[k])
-        return out
-
-    def _inbox(self, agent: str, acting: list[str]) -> torch.Tensor:
-        """Mean of the last messages of the other acting agents (zeros when there are none)."""
-        others = [self._messages[b] for b in acting if b != agent and b in self._messages]
-        return torch.stack(others).mean(dim=0) if others else torch.zeros(MESSAGE)
+        # Forward pass on the net's device; the memory and the sampling stay on the CPU (seeded CPU generator).
+        obs = {k: v.to(device) for k, v in batch_observations([observation], [self._prev]).items()}
+        box = {k: v.to(device) for k, v in batch_inboxes([inbox]).items()}
+        logits, _, message, hidden = (t.cpu() for t in self.net(obs, box, self._hidden.to(device)))
+        self._hidden = hidden
+        self._prev = int(torch.multinomial(torch.softmax(logits, dim=1), 1, generator=self._gen)[0, 0])
+        return self._prev, message[0, : self._floats].numpy() if self._floats else None
 
 
 def _rgbd(obs: dict[str, Any]) -> torch.Tensor:
@@ -151,15 +166,15 @@ def torch_device() -> torch.device:
     return device
 
 
-def make_policy(root: Path, seed: int = 0) -> CommTeamPolicy:
-    """Build the team policy from `root/weights.pt` (the isolated policy process calls this), on the device
-    `torch_device()` names."""
+def make_policy(root: Path, seed: int = 0) -> CommAgent:
+    """Build one agent's policy from `root/weights.pt` (each agent's isolated process calls this), on the
+    device `torch_device()` names."""
     path = Path(root) / WEIGHTS_FILE
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no weights; write them with write_untrained_weights or train the model")
     net = CommNet()
     net.load_state_dict(torch.load(path, map_location="cpu", weights_only=True))
-    return CommTeamPolicy(net.to(torch_device()), seed)
+    return CommAgent(net.to(torch_device()), seed)
 
 
 if __name__ == "__main__":
