@@ -2,6 +2,7 @@
 
 Yellow circles: the agents' starts. Red flags: the targets. Green: shortest paths start -> target. Blue, one
 shade per agent: the paths walked. Red crosses: where an agent that failed stopped. Grey: navigable cells.
+In comm mode, a timeline under the map shows who talked when (`talk.py`).
 """
 
 from __future__ import annotations
@@ -191,27 +192,37 @@ def episode_figure(view: EpisodeView):
     """(figure, map axes) of the episode's top-down picture, title and legend included (caller closes it).
 
     An episode on a building with several floors gets one panel per floor it touches, each labelled with the
-    floor's height; the axes returned are then the panel of agent 0's start floor."""
+    floor's height; the axes returned are then the panel of agent 0's start floor. In comm mode a timeline of
+    who talked when spans the figure under the map (`talk.py`)."""
+    from .talk import draw_timeline, has_messages
+
     x0, x1, y0, y1 = view_bounds(view)
     aspect = (y1 - y0) / max(x1 - x0, 1e-6)
     floors = episode_floors(view)
     height = max(3.5, min(12.0, 6.0 * aspect)) + 0.9
+    talk = has_messages(view)
+    extra = 0.6 + 0.25 * view.episode.num_agents if talk else 0.0
+    columns = max(1, len(floors))
+    fig = plt.figure(figsize=(6.0 * len(floors) + 1.5 if floors else 7.5, height + extra))
+    grid = fig.add_gridspec(2 if talk else 1, columns, height_ratios=[height, extra] if talk else [1.0])
+    axes = [fig.add_subplot(grid[0, k]) for k in range(columns)]
     if not floors:
-        fig, ax = plt.subplots(figsize=(7.5, height))
+        ax = axes[0]
         draw_episode(ax, view)
         ax.set_title(episode_title(view), fontsize=9)
         main = last = ax
     else:
-        fig, axes = plt.subplots(1, len(floors), figsize=(6.0 * len(floors) + 1.5, height), squeeze=False)
-        for ax, floor in zip(axes[0], floors, strict=True):
+        for ax, floor in zip(axes, floors, strict=True):
             draw_episode(ax, view, floor)
             ax.set_title(floor_title(view, floor), fontsize=9)
         fig.suptitle(episode_title(view), fontsize=9)
         start = int(view.episode.start_floors[0])
-        main = axes[0][floors.index(start)] if start in floors else axes[0][0]
-        last = axes[0][-1]
+        main = axes[floors.index(start)] if start in floors else axes[0]
+        last = axes[-1]
     last.legend(handles=legend_handles(view.episode.num_agents), fontsize=7, loc="upper left",
                 bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    if talk:
+        draw_timeline(fig.add_subplot(grid[1, :]), view, agent_blues(view.episode.num_agents))
     fig.tight_layout()
     return fig, main
 
