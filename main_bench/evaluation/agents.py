@@ -47,7 +47,12 @@ class ProcessEndpoint:
         from .isolation import PolicyProcess
 
         self.agent_id = ""
-        self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent")
+        self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent", wait=False)
+
+    def ready(self) -> None:
+        """Wait until the submission is loaded (processes of a team load in parallel); raises
+        `SubmissionError` when it cannot be."""
+        self.process.ready()
 
     def send_reset(self, info: AgentInfo, world: Any) -> None:
         self.agent_id = info.agent_id
@@ -119,14 +124,32 @@ class DecentralizedTeam:
     def reset(self, info: EpisodeInfo, world: Any = None) -> None:
         """Start an episode on every agent's endpoint (all reset requests first, then the answers)."""
         n = len(info.agent_ids)
-        while len(self._endpoints) < n:
-            self._endpoints.append(self._make(len(self._endpoints)))
+        self.start(n)
         self._ids = info.agent_ids
         self.channel = Channel(info.agent_ids, self.message_floats)
         endpoints = self._endpoints[:n]
         self._round([lambda i=i: endpoints[i].send_reset(agent_info(info, i, self.mode, self.message_floats),
                                                           world) for i in range(n)],
                     [lambda i=i: endpoints[i].receive_reset() for i in range(n)], endpoints)
+
+    @property
+    def endpoints(self) -> tuple[Any, ...]:
+        """The endpoints made so far, agent 0 first."""
+        return tuple(self._endpoints)
+
+    def start(self, n: int) -> None:
+        """Make the endpoints of agents 0..n-1 that do not exist yet: every process is started before any is
+        waited for, so they load in parallel; on an error the new ones are closed and it is raised."""
+        made: list[Any] = []
+        try:
+            for i in range(len(self._endpoints), n):
+                made.append(self._make(i))
+            for endpoint in made:
+                getattr(endpoint, "ready", lambda: None)()
+        except BaseException:
+            _concurrently([e.close for e in made])
+            raise
+        self._endpoints.extend(made)
 
     def act(self, observations: dict[str, dict[str, Any]]) -> dict[str, int]:
         """One step: each acting agent gets its observation and inbox; actions and messages are checked, and
@@ -176,7 +199,25 @@ class DecentralizedTeam:
             raise failure
 
     def close(self) -> None:
-        """Close every endpoint."""
-        for endpoint in self._endpoints:
-            endpoint.close()
+        """Close every endpoint (all at once: each process gets its second to exit in parallel)."""
+        _concurrently([e.close for e in self._endpoints])
         self._endpoints = []
+
+
+def _concurrently(calls: list[Callable[[], Any]]) -> list[Any]:
+    """Run `calls` on threads (they wait on sockets and processes, not on Python); each call's result, or the
+    exception it raised, in order. Never for starting processes: a child asks to die with the thread that
+    started it (`policy_child._die_with_parent`)."""
+    if len(calls) <= 1:
+        return [_result(c) for c in calls]
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=len(calls)) as pool:
+        return list(pool.map(_result, calls))
+
+
+def _result(call: Callable[[], Any]) -> Any:
+    try:
+        return call()
+    except BaseException as exc:  # noqa: BLE001 - handed back to the caller, who raises the first
+        return exc

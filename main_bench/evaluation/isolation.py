@@ -91,7 +91,7 @@ class PolicyProcess:
     """
 
     def __init__(self, spec: PolicySpec, limits: Limits | None = None, seed: int = 0,
-                 sandbox: SandboxSettings | None = None, role: str = "team") -> None:
+                 sandbox: SandboxSettings | None = None, role: str = "team", wait: bool = True) -> None:
         self.spec = spec
         self.role = role
         self.limits = limits or Limits()
@@ -107,7 +107,10 @@ class PolicyProcess:
         self._seq = 0
         self._episode_used = 0.0
         self._waiting: tuple[str, float, float, str] | None = None
+        self._loading: float | None = None
         self._start()
+        if wait:
+            self.ready()
 
     # -- public API ---------------------------------------------------------------------------------------------
 
@@ -183,6 +186,7 @@ class PolicyProcess:
         """Kill the current process (if any) and start a fresh one with the same spec and seed."""
         self._kill()
         self._start()
+        self.ready()
 
     def close(self) -> None:
         """Ask the process to exit (1 s), then kill it; idempotent."""
@@ -227,7 +231,17 @@ class PolicyProcess:
                 "role": self.role,
                 "memory_mb": self.limits.memory_mb, "threads": self.limits.threads, "sys_path": list(sys.path)}
         started = time.monotonic()
-        reply = self._exchange(boot, self.limits.load_seconds, "loading")
+        self._post(boot, started + self.limits.load_seconds, "loading")
+        self._loading = started
+
+    def ready(self) -> None:
+        """Wait (up to `limits.load_seconds` from the start) until the submission is loaded; a submission that
+        fails to load raises `SubmissionError`. The constructor calls it unless given `wait=False`, so that an
+        evaluator can start several processes before waiting for any."""
+        if self._loading is None:
+            return
+        started, self._loading = self._loading, None
+        reply = self._receive(started + self.limits.load_seconds, "loading")
         if reply.get("status") != "ready":
             self._kill()
             message = str(reply.get("message") or "")
@@ -241,24 +255,29 @@ class PolicyProcess:
         self.load_seconds = time.monotonic() - started
 
     def _send(self, op: str, payload: Any, budget: float, what: str) -> None:
-        assert self._sock is not None and self._proc is not None, "no policy process"
         self._seq += 1
         started = time.monotonic()
-        deadline = started + budget
-        limit = self.limits.episode_seconds if what == "episode" else budget
+        self._post((op, self._seq, payload), started + budget, what)
+        self._waiting = (op, started, started + budget, what)
+
+    def _limit(self, what: str) -> float:
+        """The limit a time-out of `what` (loading, reset, act, episode) names, in seconds."""
+        return {"loading": self.limits.load_seconds, "probe": self.limits.load_seconds, "reset": self.limits.reset_seconds,
+                "act": self.limits.step_seconds}.get(what, self.limits.episode_seconds)
+
+    def _post(self, message: Any, deadline: float, what: str) -> None:
+        assert self._sock is not None and self._proc is not None, "no policy process"
         try:
-            send_parts(self._sock, encode_request((op, self._seq, payload)), deadline)
+            send_parts(self._sock, encode_request(message), deadline)
         except TimeoutError:
             self._kill()
-            raise PolicyError(f"timeout: {what} took > {limit:g} s") from None
+            raise PolicyError(f"timeout: {what} took > {self._limit(what):g} s") from None
         except (EOFError, ConnectionError):
             raise PolicyError(self._death_reason()) from None
-        self._waiting = (op, started, deadline, what)
 
     def _receive(self, deadline: float, what: str) -> dict[str, Any]:
         assert self._sock is not None and self._proc is not None, "no policy process"
-        limit = self.limits.episode_seconds if what == "episode" else self.limits.step_seconds if what == "act" \
-            else self.limits.reset_seconds
+        limit = self._limit(what)
         try:
             return recv_reply(self._sock, deadline)
         except TimeoutError:
@@ -288,22 +307,6 @@ class PolicyProcess:
             self._kill()
             raise PolicyError(f"invalid_action: unreadable reply status {reply.get('status')!r}")
         return reply
-
-    def _exchange(self, message: Any, budget: float, what: str) -> dict[str, Any]:
-        assert self._sock is not None and self._proc is not None, "no policy process"
-        deadline = time.monotonic() + budget
-        limit = self.limits.episode_seconds if what == "episode" else budget
-        try:
-            send_parts(self._sock, encode_request(message), deadline)
-            return recv_reply(self._sock, deadline)
-        except TimeoutError:
-            self._kill()
-            raise PolicyError(f"timeout: {what} took > {limit:g} s") from None
-        except (EOFError, ConnectionError):
-            raise PolicyError(self._death_reason()) from None
-        except ValueError as exc:
-            self._kill()
-            raise PolicyError(f"invalid_action: unreadable reply from the policy process ({exc})") from None
 
     def _policy_exception(self, reply: dict[str, Any], op: str) -> PolicyError:
         name, message = str(reply.get("type", "Exception")), str(reply.get("message", ""))
@@ -338,7 +341,7 @@ class PolicyProcess:
         return f"dead: exit code {code}"
 
     def _kill(self) -> None:
-        self._waiting = None
+        self._waiting = self._loading = None
         if self._finalizer is not None:
             self._finalizer()
         self._proc = self._sock = self._finalizer = None
