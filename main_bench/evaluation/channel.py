@@ -71,7 +71,7 @@ def _describe_data(data: Any) -> dict[str, Any]:
         return {"length": int(arr.size)}
     with np.errstate(over="ignore"):
         values = arr.astype(np.float32)
-    return {"values": [float(v) for v in values]}
+    return {"values": values.tolist()}
 
 
 def describe_message(message: Any) -> dict[str, Any] | None:
