@@ -6,7 +6,7 @@ its `act` gets only its own observation. So the silent oracle plans alone: it fo
 never steps aside for a teammate it cannot see.
 
 The comm oracle also talks: every step it broadcasts `[d, x, y, z]` (16 bytes): its geodesic distance to its
-target and where the target's nearest goal point is (world frame, metres). On a shared target, an agent that
+target and where the target's goal point nearest to its start is (world frame, metres). On a shared target, an agent that
 hears a teammate at least `yield_margin` metres closer to the target than itself stops walking (turns in place)
 and leaves the way to the one that will get there first; it walks on as soon as no closer teammate reports.
 """
@@ -70,9 +70,11 @@ class PrivilegedAgent:
         self._info: AgentInfo | None = None
         self._view: OwnView | None = None
         self._answer: tuple[int, Any] = (TURN_LEFT, None)
+        self._goal: np.ndarray | None = None
 
     def send_reset(self, info: AgentInfo, world: Any) -> None:
         self._info = info
+        self._goal: np.ndarray | None = None
         self._view = OwnView(world, self.index)
         self._team.reset(info, self._view)  # type: ignore[arg-type] - AgentInfo has what the baselines read
 
@@ -91,8 +93,10 @@ class PrivilegedAgent:
             action = self._team.act({info.agent_id: observation})[info.agent_id]
         message = None
         if talks:
-            path = view.path(self.index)
-            goal = path[-1] if len(path) else np.full(3, np.nan)
+            if self._goal is None:  # the target does not move: where its nearest goal point is, once an episode
+                path = view.path(self.index)
+                self._goal = path[-1] if len(path) else np.full(3, np.nan)
+            goal = self._goal
             message = np.array([own, *goal], dtype=np.float32) if np.isfinite(goal).all() else None
         self._answer = (int(action), describe_message(message))
 
