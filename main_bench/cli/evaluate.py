@@ -64,8 +64,11 @@ def _render(payload: dict) -> str:
                 return f"{m} n/a"
             return f"{m} {s['mean']:.3f} [{s['ci_low']:.3f}, {s['ci_high']:.3f}]"
 
+        talk = track.get("communication") or {}
         lines.append(f"{key}: {track['episodes']} episodes, {track['failed_episodes']} failed; "
-                     + ", ".join(cell(m) for m in ("success", "spl", "soft_spl", "distance_to_goal")))
+                     + ", ".join(cell(m) for m in ("success", "spl", "soft_spl", "distance_to_goal"))
+                     + (f", {talk['bytes_per_agent_step']:.1f} message bytes/agent-step"
+                        if talk.get("message_bytes") else ""))
     return "\n".join(lines)
 
 

@@ -147,9 +147,22 @@ def _cli_silent(tiny_dataset, out: Path, agent: str) -> pd.DataFrame:
     return records.sort_values(["task", "episode_id", "agent_index"]).reset_index(drop=True)
 
 
+def test_an_agent_finds_nothing_of_its_teammates_in_its_own_process(tiny_dataset, tmp_path):
+    """Without any OS sandbox: the objects in an agent's process (what the evaluator handed it) and shared
+    memory hold nothing of its teammates; a policy acting on anything it found scores as the honest one."""
+    honest = _cli_silent(tiny_dataset, tmp_path / "honest", f"{PEEKER}:Honest")
+    peeker = _cli_silent(tiny_dataset, tmp_path / "peeker", f"{PEEKER}:ObjectPeeker")
+    columns = ["episode_id", "agent_index", "success", "spl", "distance_to_goal", "path_length", "steps",
+               "called_found"]
+    pd.testing.assert_frame_equal(peeker[columns], honest[columns])
+    assert (peeker["failure"] == "").all()
+    assert (peeker.loc[peeker["agent_index"] >= 0, "steps"] == 21).all()  # 20 moves, then found: nothing leaked
+
+
 def test_a_peeking_agent_learns_nothing_it_could_use(tiny_dataset, tmp_path):
     """The peeker tries the evaluator's objects, its parent's memory, the data set named on the command line
-    and shared memory; anything found makes it call `found` at once. Its score equals the honest policy's."""
+    and shared memory; anything found makes it call `found` at once (honest: after 20 moves). Its score equals
+    the honest policy's."""
     need(importlib.util.find_spec("main_bench.evaluation.sandbox") is not None,
          "the policy sandbox (main_bench.evaluation.sandbox) that hides the evaluator's files and memory")
     honest = _cli_silent(tiny_dataset, tmp_path / "honest", f"{PEEKER}:Honest")
@@ -158,4 +171,4 @@ def test_a_peeking_agent_learns_nothing_it_could_use(tiny_dataset, tmp_path):
     columns = ["episode_id", "agent_index", "success", "spl", "soft_spl", "distance_to_goal", "path_length",
                "steps", "called_found"]
     pd.testing.assert_frame_equal(peeker[columns], honest[columns])
-    assert not peeker["called_found"].any()
+    assert (peeker.loc[peeker["agent_index"] >= 0, "steps"] == 21).all()  # 20 moves, then found: nothing leaked

@@ -1,7 +1,8 @@
 """Built-in baselines, given to `main-bench evaluate --agent baseline:NAME`.
 
 `random` and `oracle` are privileged (see `privileged.py`): they run inside the evaluator with access to the
-simulator state and the target fields. Other `baseline:NAME` specs (shipped policy directories such as the
+simulator state and the target fields; in the silent and comm modes one instance per agent, restricted to its
+own agent (`agent.py`). Other `baseline:NAME` specs (shipped policy directories such as the
 torch example under `baselines/comm/`) are ordinary submissions loaded by `submission.py`.
 """
 

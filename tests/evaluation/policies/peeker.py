@@ -6,7 +6,7 @@ process (the evaluator), files named on the command lines of its parent and gran
 set: it matches its own target observation against every episode row to find its teammates' start positions
 and targets), and shared memory (`/dev/shm`, `/tmp` files the evaluator might write). Whatever it finds
 changes what it does: it calls `found` at once, so a leak shows in the score. Without a leak it moves exactly
-as `Honest`, randomly from a generator seeded by its episode seed.
+as `Honest`, randomly from a generator seeded by its episode seed, and calls `found` after `STEPS` moves.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+STEPS = 20
 SUSPECT_TYPES = {"EpisodeWorld", "Episode", "EpisodeJudge", "DecentralizedTeam", "Channel", "OwnView"}
 
 
@@ -32,13 +33,15 @@ class Honest:
     def reset(self, info) -> None:
         self.info = info
         self.rng = np.random.default_rng([self.seed, info.seed])
+        self.t = 0
         self.leaks = self._peek_everything(None) if self.peek else []
 
     def act(self, observation, inbox):
         if self.peek:
             self.leaks += self._peek_everything(observation)
         action = int(self.rng.integers(1, 4))
-        return (0 if self.leaks else action), None
+        self.t += 1
+        return (0 if self.leaks or self.t > STEPS else action), None
 
     # -- the attempts -------------------------------------------------------------------------------------------
 
@@ -129,3 +132,12 @@ class Peeker(Honest):
     """`Honest`, plus every attempt to read the teammates' state (see the module docstring)."""
 
     peek = True
+
+
+class ObjectPeeker(Honest):
+    """Only the attempts that need no OS sandbox to fail: objects in its own process and shared memory."""
+
+    peek = True
+
+    def _peek_everything(self, observation) -> list[str]:
+        return self._objects() + self._shared_memory()
