@@ -49,15 +49,12 @@ class _IsolatedPolicy:
     uses_pixels = True
 
     def __init__(self, settings: EvalSettings, manifest: Any) -> None:
-        from .isolation import Limits, PolicyProcess
+        from .isolation import PolicyProcess
         from .sandbox import evaluation_sandbox
         from .submission import parse_spec
 
-        limits = Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
-                        memory_mb=settings.limits.memory_mb,
-                        torch_device=None if settings.gpu is None else f"cuda:{settings.gpu}")
         sandbox = evaluation_sandbox(settings, manifest)
-        self._proc = PolicyProcess(parse_spec(settings.agent), limits, settings.seed, sandbox)
+        self._proc = PolicyProcess(parse_spec(settings.agent), process_limits(settings), settings.seed, sandbox)
 
     def reset(self, info: Any) -> None:
         from .isolation import PolicyError
@@ -101,7 +98,7 @@ class WorkerContext:
             if self.settings.mode != "central":
                 from .agents import DecentralizedTeam
 
-                make, self._privileged = agent_endpoints(self.settings)
+                make, self._privileged = agent_endpoints(self.settings, self.manifest)
                 self._policy = DecentralizedTeam(make, self.settings.mode, self.settings.channel_floats,
                                                  self._privileged)
                 return self._policy
@@ -185,9 +182,10 @@ class WorkerContext:
         self._policy = None
 
 
-def agent_endpoints(settings: EvalSettings) -> tuple[Callable[[int], Any], bool]:
+def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[int], Any], bool]:
     """(agent index -> endpoint, privileged) for the decentralized modes: the privileged baselines run in this
-    process, one restricted instance per agent; a submission runs one `PolicyProcess` per agent."""
+    process, one restricted instance per agent; a submission runs one `PolicyProcess` per agent, each in the
+    evaluation's sandbox."""
     from .baselines import PRIVILEGED, privileged_baseline
 
     if privileged_baseline(settings.agent) is not None:
@@ -196,13 +194,21 @@ def agent_endpoints(settings: EvalSettings) -> tuple[Callable[[int], Any], bool]
         kind = next(k for k in PRIVILEGED if settings.agent.strip() == f"baseline:{k}")
         return (lambda i: PrivilegedAgent(kind, i, settings.seed)), True
     from .agents import ProcessEndpoint
-    from .isolation import Limits
+    from .sandbox import evaluation_sandbox
     from .submission import parse_spec
 
-    limits = Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
-                    memory_mb=settings.limits.memory_mb)
-    spec = parse_spec(settings.agent)
-    return (lambda i: ProcessEndpoint(spec, limits, settings.seed)), False
+    limits, spec, sandbox = process_limits(settings), parse_spec(settings.agent), evaluation_sandbox(settings, manifest)
+    return (lambda i: ProcessEndpoint(spec, limits, settings.seed, sandbox)), False
+
+
+def process_limits(settings: EvalSettings) -> Any:
+    """The `isolation.Limits` of every policy process of an evaluation (its `--step-seconds`,
+    `--episode-seconds`, `--memory-mb`, and `--gpu` as the torch device)."""
+    from .isolation import Limits
+
+    return Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
+                  memory_mb=settings.limits.memory_mb,
+                  torch_device=None if settings.gpu is None else f"cuda:{settings.gpu}")
 
 
 def message_log(policy: Any, trace: EpisodeTrace) -> tuple[np.ndarray, np.ndarray]:
