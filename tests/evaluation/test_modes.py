@@ -3,7 +3,6 @@ the channel's limits and accounting, the privileged baselines per agent, and wha
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
@@ -136,10 +135,10 @@ def test_own_view_answers_only_for_its_agent():
         view.path(0)
 
 
-def _cli_silent(tiny_dataset, out: Path, agent: str) -> pd.DataFrame:
+def _cli_silent(tiny_dataset, out: Path, agent: str, *extra: str) -> pd.DataFrame:
     dataset, cache = tiny_dataset
     args = ["evaluate", "--episodes", dataset, "--split", "val", "--agent", agent, "--out", out, "--limit", "2",
-            "--cache-dir", cache, "--mode", "silent", "--no-progress", "--json"]
+            "--cache-dir", cache, "--mode", "silent", "--no-progress", "--json", *extra]
     run = subprocess.run([sys.executable, "-m", "main_bench.cli.app", *map(str, args)], capture_output=True,
                          text=True, timeout=600)
     assert run.returncode == 0, run.stderr
@@ -163,8 +162,10 @@ def test_a_peeking_agent_learns_nothing_it_could_use(tiny_dataset, tmp_path):
     """The peeker tries the evaluator's objects, its parent's memory, the data set named on the command line
     and shared memory; anything found makes it call `found` at once (honest: after 20 moves). Its score equals
     the honest policy's."""
-    need(importlib.util.find_spec("main_bench.evaluation.sandbox") is not None,
-         "the policy sandbox (main_bench.evaluation.sandbox) that hides the evaluator's files and memory")
+    from main_bench.evaluation.sandbox import sandbox_problem
+
+    problem = sandbox_problem()
+    need(problem is None, f"the policy sandbox that hides the evaluator's files and memory: {problem}")
     honest = _cli_silent(tiny_dataset, tmp_path / "honest", f"{PEEKER}:Honest")
     peeker = _cli_silent(tiny_dataset, tmp_path / "peeker", f"{PEEKER}:Peeker")
     assert (honest["failure"] == "").all() and (peeker["failure"] == "").all()
@@ -172,3 +173,6 @@ def test_a_peeking_agent_learns_nothing_it_could_use(tiny_dataset, tmp_path):
                "steps", "called_found"]
     pd.testing.assert_frame_equal(peeker[columns], honest[columns])
     assert (peeker.loc[peeker["agent_index"] >= 0, "steps"] == 21).all()  # 20 moves, then found: nothing leaked
+    # The attempts are real: without the sandbox the same peeker finds the evaluator and calls found at once.
+    exposed = _cli_silent(tiny_dataset, tmp_path / "exposed", f"{PEEKER}:Peeker", "--no-sandbox")
+    assert (exposed.loc[exposed["agent_index"] >= 0, "steps"] == 1).all()

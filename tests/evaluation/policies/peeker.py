@@ -35,10 +35,15 @@ class Honest:
         self.rng = np.random.default_rng([self.seed, info.seed])
         self.t = 0
         self.leaks = self._peek_everything(None) if self.peek else []
+        if self.leaks:
+            print(f"peeker found: {self.leaks[:4]}")  # the evaluator's stderr: what leaked, for the test's reader
 
     def act(self, observation, inbox):
         if self.peek:
-            self.leaks += self._peek_everything(observation)
+            found = self._peek_everything(observation)
+            if found and not self.leaks:
+                print(f"peeker found: {found[:4]}")  # the evaluator's stderr: what leaked, for the test's reader
+            self.leaks += found
         action = int(self.rng.integers(1, 4))
         self.t += 1
         return (0 if self.leaks or self.t > STEPS else action), None
@@ -70,8 +75,15 @@ class Honest:
         return found
 
     def _parent_memory(self) -> list[str]:
+        """The memory of an ancestor that is the evaluator (its command line names `evaluate`): readable maps,
+        environment or memory would hand over whatever it holds, the teammates' state included."""
         found = []
-        for pid in {os.getppid()}:
+        for pid in (os.getppid(), _parent_of(os.getppid())):
+            try:
+                if b"evaluate" not in Path(f"/proc/{pid}/cmdline").read_bytes():
+                    continue
+            except OSError:
+                continue
             for name in ("mem", "environ", "maps"):
                 try:
                     with open(f"/proc/{pid}/{name}", "rb") as fh:
