@@ -51,13 +51,15 @@ def generate(
     per_scene: int = typer.Option(100, "--per-scene", help="Episodes per (scene, task, agent count)."),
     min_distance: float = typer.Option(2.0, "--min-distance", help="Least start-to-target geodesic (m)."),
     max_distance: float = typer.Option(20.0, "--max-distance", help="Largest start-to-target geodesic (m)."),
-    success_distance: float = typer.Option(1.0, "--success-distance", help="Success distance recorded (m)."),
-    goal_radius: float = typer.Option(0.5, "--goal-radius", help="Goal points: cells this close to an object (m)."),
+    success_distance: float = typer.Option(
+        1.0, "--success-distance", help="Radius of the success regions (m): navigable cells this close to an object "
+        "that see it, or this close (geodesic) to a point goal."),
     start_margin: float = typer.Option(0.1, "--start-margin", help="Starts at least 2 x radius + this apart (m)."),
     cross_floor: bool = typer.Option(False, "--cross-floor", help="Allow starts on another floor than the target."),
     ratio_threshold: float = typer.Option(1.1, "--ratio-threshold",
                                           help="Thin episodes with geodesic/Euclidean below this (0: off)."),
-    min_island_area: float = typer.Option(2.0, "--min-island-area", help="Skip targets on smaller islands (m^2)."),
+    min_island_area: float = typer.Option(
+        10.0, "--min-island-area", help="Islands smaller than this hold no start and no goal (m^2)."),
     max_rounds: int = typer.Option(8, "--max-rounds", help="Sampling rounds per shard before giving up."),
     shard_size: int = typer.Option(50_000, "--shard-size", help="Most episodes per shard file."),
     seed: int = typer.Option(0, "--seed", help="Seed of all randomness."),
@@ -96,7 +98,7 @@ def generate(
     settings = GenerationSettings(
         tasks=_tasks(task), agents=parse_int_list(agents, "--agents", 1, 8), per_scene=per_scene,
         min_distance=min_distance, max_distance=max_distance, success_distance=success_distance,
-        goal_radius=goal_radius, start_margin=start_margin, cross_floor=cross_floor,
+        start_margin=start_margin, cross_floor=cross_floor,
         ratio_threshold=ratio_threshold, min_island_area=min_island_area, max_rounds=max_rounds,
         shard_size=shard_size, seed=seed, max_steps=max_steps, forward_step=forward_step,
         turn_angle_deg=turn_angle, camera_width=width, camera_height=height, camera_hfov_deg=hfov,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pyarrow as pa
 import pyarrow.dataset as pads
@@ -16,7 +17,7 @@ from .schema import PARTITION_SCHEMA, ROW_SCHEMA, Episode
 
 _FIX = "restore it or regenerate the data set"
 
-__all__ = ["Manifest", "SceneEntry", "ShardEntry", "load_episodes", "load_table", "read_manifest",
+__all__ = ["Manifest", "SceneEntry", "ShardEntry", "load_episodes", "load_navmesh", "load_table", "read_manifest",
            "resolve_scene"]
 
 
@@ -82,3 +83,28 @@ def resolve_scene(manifest: Manifest, scene_id: str, cache_dir: str | Path | Non
         raise DatasetError(f"scene {scene_id!r} at {path} differs from the one the data set was made from "
                            f"(hash {found[:12]} != {entry.hash[:12]})", path=manifest.root)
     return path
+
+
+def load_navmesh(manifest: Manifest, scene_id: str) -> Any:
+    """The navmesh the data set was made with for `scene_id` (stored in it, checked against its SHA-256).
+
+    Every distance of the data set (l_i, the success regions) was measured on this navmesh, so evaluation and
+    `validate --recheck` reproduce them exactly on any machine.
+    """
+    from ..io import sha256_file
+    from ..navmesh import NavMesh
+
+    entry = (manifest.navmeshes or {}).get(scene_id)
+    if entry is None:
+        raise DatasetError(f"the manifest records no navmesh for scene {scene_id!r}; regenerate the data set",
+                           path=manifest.root)
+    path = manifest.root / entry["path"]
+    if not path.is_file():
+        raise DatasetError(f"stored navmesh of {scene_id!r} is missing: {entry['path']}; copy the whole data set "
+                           "folder, or regenerate it", path=manifest.root)
+    found = sha256_file(path)
+    if found != entry["sha256"]:
+        raise DatasetError(f"stored navmesh {entry['path']} differs from the one the data set was made with "
+                           f"(sha256 {found[:12]} != {entry['sha256'][:12]}); restore it or regenerate the data set",
+                           path=manifest.root)
+    return NavMesh.load(path)

@@ -22,6 +22,8 @@ from .settings import GenerationSettings
 from .sources import SceneSource
 
 Executor = Literal["local", "ray"]
+#: Folder of a data set holding the navmesh of each scene it was made with (`<scene_id>.navmesh`).
+NAVMESH_DIR = "navmesh"
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,10 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
     made: dict[str, dict] = {}
     if todo:
         made = _sample_shards(spec, todo)
+    nav = navmesh_entry(out, spec["scene_id"])
+    if not (out / nav["path"]).is_file():  # shards reused from a run whose navmesh file was lost: store it now
+        _stored_navmesh(spec, _build_navmesh(spec))
+    nav = navmesh_entry(out, spec["scene_id"], with_hash=True)
     entries = []
     for s in shards:
         path = out / s.rel_path
@@ -86,18 +92,22 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
                         "agents": s.agents, "shard": s.shard, "requested": s.count, "rows": rows,
                         "sha256": sha256_file(path), "reason": report.get("reason", ""),
                         "rejections": report.get("rejections", {}), "written": written,
-                        "point_goals": report.get("point_goals", "")})
+                        "point_goals": report.get("point_goals", ""), "navmesh": nav})
     return entries
 
 
-def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
+def navmesh_entry(out: Path, scene_id: str, with_hash: bool = False) -> dict[str, str]:
+    """Where a data set stores the navmesh of `scene_id` (relative path) and, `with_hash`, its SHA-256."""
+    entry = {"path": f"{NAVMESH_DIR}/{scene_id}.navmesh"}
+    if with_hash:
+        entry["sha256"] = sha256_file(Path(out) / entry["path"])
+    return entry
+
+
+def _build_navmesh(spec: dict[str, Any]) -> Any:
     from ..navmesh import NavMesh, NavMeshSettings
     from ..scenes.cache import load_scene_geometry
-    from .sampler import sample_episodes
-    from .shards import batch_table, write_shard
-    from .targets import TargetBank
 
-    settings = GenerationSettings.from_json(spec["settings"])
     nav_settings = NavMeshSettings.from_json(spec["navmesh_settings"])
     scene = load_scene_geometry(_scene_path(spec), up=spec["up"])
     if scene.content_hash != spec["scene_hash"]:
@@ -106,14 +116,55 @@ def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
                            path=spec["scene_path"])
     try:
         if spec.get("cache_dir"):
-            navmesh = NavMesh.build_cached(scene, nav_settings, Path(spec["cache_dir"]))
-        else:
-            navmesh = NavMesh.build(scene, nav_settings)
+            return scene, NavMesh.build_cached(scene, nav_settings, Path(spec["cache_dir"]))
+        return scene, NavMesh.build(scene, nav_settings)
     except NavMeshError as exc:
         if exc.path is not None and exc.path != Path(spec["scene_path"]):
             raise
         raise NavMeshError(f"scene {spec['scene_id']!r}: {exc.problem}; or leave this scene out of --scenes",
                            path=spec["scene_path"]) from None
+
+
+def _stored_navmesh(spec: dict[str, Any], built: tuple[Any, Any]) -> Any:
+    """The navmesh the data set stores for the unit's scene, as read back from its file.
+
+    The first unit of a scene to finish its build publishes it (`os.link`: never replaces a file); every unit
+    then samples on the published file's navmesh, so all distances of a data set come from the navmesh it
+    stores, bit for bit, whichever machine built it.
+    """
+    import os
+    import tempfile
+
+    from ..navmesh import NavMesh
+
+    path = Path(spec["out"]) / navmesh_entry(Path(spec["out"]), spec["scene_id"])["path"]
+    if not path.is_file():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        try:
+            built[1].save(tmp)
+            with open(tmp, "rb") as fh:
+                os.fsync(fh.fileno())
+            try:
+                os.link(tmp, path)
+            except FileExistsError:
+                pass
+        finally:
+            Path(tmp).unlink(missing_ok=True)
+    return NavMesh.load(path)
+
+
+def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
+    from ..navmesh import NavMeshSettings
+    from .sampler import sample_episodes
+    from .shards import batch_table, write_shard
+    from .targets import TargetBank
+
+    settings = GenerationSettings.from_json(spec["settings"])
+    nav_settings = NavMeshSettings.from_json(spec["navmesh_settings"])
+    scene, built = _build_navmesh(spec)
+    navmesh = _stored_navmesh(spec, (scene, built))
     bank = TargetBank(scene, navmesh, settings)
     separation = settings.separation(nav_settings.agent_radius)
     made = {}
@@ -155,7 +206,7 @@ def _prepare_out(out: Path, ident: dict, overwrite: bool) -> None:
                          path=out)
     if overwrite:
         for child in out.iterdir():
-            if child.name.startswith("split=") and child.is_dir():
+            if (child.name.startswith("split=") or child.name == NAVMESH_DIR) and child.is_dir():
                 shutil.rmtree(child)
         for name in (MANIFEST_NAME, LOCK_NAME):
             (out / name).unlink(missing_ok=True)
@@ -164,7 +215,7 @@ def _prepare_out(out: Path, ident: dict, overwrite: bool) -> None:
         diff = sorted(_diff(existing, ident))
         raise InputError(f"holds a data set generated with different parameters ({', '.join(diff[:6])} differ); "
                          "pass --overwrite to replace it, or choose another --out", path=out)
-    for stale in out.glob("split=*/task=*/agents=*/.part-*"):
+    for stale in [*out.glob("split=*/task=*/agents=*/.part-*"), *out.glob(f"{NAVMESH_DIR}/.*.tmp")]:
         stale.unlink()  # temporary files of a killed run
 
 

@@ -1,11 +1,23 @@
-"""Goals: where an agent counts as being at its target, shared by episode generation and evaluation.
+"""Success regions: where an agent counts as being at its target, defined once for generation and evaluation.
 
-An object target's goal points are the navigable cells whose horizontal distance to the object's bounding-box
-footprint is at most `goal_radius`, on the object's level: cell heights within
-[bbox_min.z - agent_height, bbox_min.z + max_climb], and only on the largest navmesh island among those cells
-(so the top of a table, a small island of its own, or a shelf is not where a table counts as found). A point target has one goal point, itself. The distance to a target is the geodesic distance
-to its nearest goal point: one multi-source distance field over all goal points. An object without goal
-points is not a target.
+A target's *success region* is a set of navigable cells of the data set's navmesh:
+
+- an object: the cells whose horizontal distance to the object's bounding-box footprint is at most the success
+  distance (1.0 m by default), on the object's level (cell heights within [bbox_min.z - agent_height,
+  bbox_min.z + max_climb]), *from which the object is visible*: a segment from the cell at camera height
+  (`camera_height_m` above the floor) to the box's nearest point or towards its centre reaches the box without
+  crossing scene geometry (`visibility.sees_box`; Habitat ObjectNav's view points). Of those, only the largest
+  navmesh island's cells count (a table top, an island of its own, is not where a table is found);
+- a point goal: the cells within the success distance (geodesic) of the point.
+
+`l_i` is the geodesic distance from agent i's start to the nearest cell of its region, `d_i` the distance to
+the region at the end, and a `found` call is correct when the agent's distance to its region is at most
+`SUCCESS_TOLERANCE_CELLS` navmesh cells (inside a cell is up to half a diagonal from its centre). So an
+agent that walks the shortest path walks `l_i` and every metre of detour costs SPL. An object whose region is
+empty is not a target.
+
+Regions are stored with each episode as run-length encoded cell indices (`encode_cells`), next to the navmesh
+the data set was made with, so evaluation and `validate --recheck` rebuild exactly the same distance fields.
 """
 
 from __future__ import annotations
@@ -15,22 +27,29 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import DatasetError
+from .visibility import sees_box
 
 if TYPE_CHECKING:
     from ..navmesh import DistanceField, NavMesh
     from ..scenes import Scene, SemanticObject
 
+#: A `found` call is correct within this many navmesh cells (geodesic) of the success region.
+SUCCESS_TOLERANCE_CELLS = 1.0
 
-def _radius(settings: Any) -> float:
-    """`goal_radius` from generation settings, a manifest, or a plain number (metres)."""
-    if isinstance(settings, int | float):
-        return float(settings)
-    radius = getattr(settings, "goal_radius", None)
-    if radius is None and hasattr(settings, "settings"):
-        radius = settings.settings.goal_radius
-    if radius is None:
-        raise TypeError("settings must carry goal_radius (GenerationSettings, Manifest or a float)")
-    return float(radius)
+
+def success_tolerance(cell_size: float) -> float:
+    """Geodesic distance (m) to the success region within which a `found` call is correct: one cell."""
+    return float(SUCCESS_TOLERANCE_CELLS * cell_size)
+
+
+def _setting(settings: Any, name: str) -> float:
+    """`name` from generation settings or a manifest (its `settings`)."""
+    value = getattr(settings, name, None)
+    if value is None and hasattr(settings, "settings"):
+        value = getattr(settings.settings, name)
+    if value is None:
+        raise TypeError(f"settings must carry {name} (GenerationSettings or Manifest)")
+    return float(value)
 
 
 def footprint_distance(points: np.ndarray, bbox_min: np.ndarray, bbox_max: np.ndarray) -> np.ndarray:
@@ -42,15 +61,23 @@ def footprint_distance(points: np.ndarray, bbox_min: np.ndarray, bbox_max: np.nd
     return np.hypot(d[:, 0], d[:, 1])
 
 
-def goal_points(navmesh: NavMesh, obj: SemanticObject, settings: Any) -> np.ndarray:
-    """The object's goal points: (G, 3) navigable cell centres (canonical frame, metres); G may be 0.
+def scene_triangles(scene: Scene) -> np.ndarray:
+    """(F, 3, 3) the scene's triangles (metres, canonical frame), for `object_region`."""
+    return np.asarray(scene.vertices, dtype=np.float64)[np.asarray(scene.faces, dtype=np.int64)]
 
-    `settings` supplies `goal_radius` (generation settings, a manifest, or the radius itself in metres).
+
+def object_region(navmesh: NavMesh, obj: SemanticObject, triangles: np.ndarray, settings: Any) -> np.ndarray:
+    """(G,) sorted indices into `navmesh.cells()` of the object's success region (module docstring); G may be 0.
+
+    `triangles`: `scene_triangles(scene)`. `settings`: generation settings or a manifest (success distance,
+    camera height).
     """
-    radius = _radius(settings)
+    radius = _setting(settings, "success_distance")
+    eye = _setting(settings, "camera_height_m")
     cells = np.asarray(navmesh.cells(), dtype=np.float64).reshape(-1, 3)
+    empty = np.zeros(0, dtype=np.int64)
     if len(cells) == 0:
-        return np.zeros((0, 3))
+        return empty
     lo = np.asarray(obj.bbox_min, dtype=np.float64)
     hi = np.asarray(obj.bbox_max, dtype=np.float64)
     ns = navmesh.settings
@@ -59,43 +86,80 @@ def goal_points(navmesh: NavMesh, obj: SemanticObject, settings: Any) -> np.ndar
     near_box = (x >= lo[0] - r) & (x <= hi[0] + r) & (y >= lo[1] - r) & (y <= hi[1] + r)
     level = near_box & (z >= lo[2] - float(ns.agent_height)) & (z <= lo[2] + float(ns.max_climb))
     idx = np.flatnonzero(level)
+    idx = idx[footprint_distance(cells[idx], lo, hi) <= r]
     if len(idx) == 0:
-        return np.zeros((0, 3))
-    dist = footprint_distance(cells[idx], lo, hi)
-    near = dist <= radius + 1e-9
-    idx, dist = idx[near], dist[near]
+        return empty
+    eyes = cells[idx] + np.array([0.0, 0.0, eye])
+    tris = triangles.reshape(-1, 3, 3)
+    idx = idx[sees_box(eyes, lo, hi, tris)]
     if len(idx) == 0:
-        return np.zeros((0, 3))
+        return empty
     islands = np.asarray(navmesh.cell_island())[idx]
     areas = np.array([navmesh.islands[int(i)].area for i in islands])
     keep = islands == islands[np.argmax(areas)]
-    return cells[idx[keep]].copy()
+    return np.sort(idx[keep]).astype(np.int64)
 
 
-def target_field(navmesh: NavMesh, scene: Scene, target: int | np.ndarray, settings: Any) -> DistanceField:
-    """The distance field to a target: an object's instance id (its goal points) or a navigable point (3,).
+def point_region(navmesh: NavMesh, point: np.ndarray, settings: Any) -> np.ndarray:
+    """(G,) sorted cell indices within the success distance (geodesic, metres) of a navigable point (3,)."""
+    radius = _setting(settings, "success_distance")
+    field = navmesh.distance_field(np.asarray(point, dtype=np.float64).reshape(1, 3))
+    return np.flatnonzero(field.cell_distances() <= radius).astype(np.int64)
 
-    `field.distance(points)` then gives each point's geodesic distance to the target (metres, inf unreachable).
-    Raises `DatasetError` for an unknown instance id or an object without goal points.
+
+def region_field(navmesh: NavMesh, cells: np.ndarray) -> DistanceField:
+    """The distance field to a region given as cell indices: `distance(points)` is d to the region (m)."""
+    cells = np.asarray(cells, dtype=np.int64)
+    if len(cells) == 0:
+        raise DatasetError("empty success region: the data set does not match its navmesh; regenerate it")
+    return navmesh.distance_field(np.asarray(navmesh.cells(), dtype=np.float64)[cells])
+
+
+def target_region(navmesh: NavMesh, scene: Scene, target: int | np.ndarray, settings: Any) -> np.ndarray:
+    """The success region's cell indices of a target: an object's instance id, or a point goal (3,).
+
+    Raises `DatasetError` for an unknown instance id, an object without a region, or a bad point.
     """
-    return navmesh.distance_field(target_goal_points(navmesh, scene, target, settings))
-
-
-def target_goal_points(navmesh: NavMesh, scene: Scene, target: int | np.ndarray, settings: Any) -> np.ndarray:
-    """The goal points (G, 3) of a target given as in `target_field`."""
     if isinstance(target, int | np.integer) and not isinstance(target, bool):
         if int(target) < 0:
             raise DatasetError(f"instance id {int(target)} names a point goal; pass the target position instead")
         obj = next((o for o in scene.objects if o.instance_id == int(target)), None)
         if obj is None:
             raise DatasetError(f"scene {scene.scene_id!r} has no object with instance id {int(target)}")
-        points = goal_points(navmesh, obj, settings)
-        if len(points) == 0:
+        cells = object_region(navmesh, obj, scene_triangles(scene), settings)
+        if len(cells) == 0:
             raise DatasetError(
-                f"object {int(target)} ({obj.category}) of scene {scene.scene_id!r} has no navigable goal point "
-                f"within {_radius(settings)} m; it cannot be a target")
-        return points
+                f"object {int(target)} ({obj.category}) of scene {scene.scene_id!r} has no navigable cell within "
+                f"{_setting(settings, 'success_distance')} m from which it is visible; it cannot be a target")
+        return cells
     point = np.asarray(target, dtype=np.float64).reshape(-1, 3)
     if len(point) != 1 or not np.all(np.isfinite(point)):
         raise DatasetError(f"a point target must be one finite (x, y, z) position, got {target!r}")
-    return point
+    cells = point_region(navmesh, point[0], settings)
+    if len(cells) == 0:
+        raise DatasetError(f"point target {point[0].tolist()} is not on the navmesh of {scene.scene_id!r}")
+    return cells
+
+
+def target_field(navmesh: NavMesh, scene: Scene, target: int | np.ndarray, settings: Any) -> DistanceField:
+    """The distance field to a target's success region (see `target_region`), computed from the scene."""
+    return region_field(navmesh, target_region(navmesh, scene, target, settings))
+
+
+def encode_cells(cells: np.ndarray) -> np.ndarray:
+    """Run-length code of sorted cell indices: (2R,) int32 [start_0, length_0, start_1, length_1, ...]."""
+    cells = np.asarray(cells, dtype=np.int64)
+    if len(cells) == 0:
+        return np.zeros(0, dtype=np.int32)
+    breaks = np.flatnonzero(np.diff(cells) != 1) + 1
+    starts = np.concatenate(([0], breaks))
+    ends = np.concatenate((breaks, [len(cells)]))
+    return np.stack([cells[starts], ends - starts], axis=1).reshape(-1).astype(np.int32)
+
+
+def decode_cells(code: np.ndarray) -> np.ndarray:
+    """Cell indices (int64, sorted) from `encode_cells` output."""
+    pairs = np.asarray(code, dtype=np.int64).reshape(-1, 2)
+    if len(pairs) == 0:
+        return np.zeros(0, dtype=np.int64)
+    return np.concatenate([np.arange(s, s + n) for s, n in pairs])

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import DatasetError, InputError
 from ..io import atomic_write_bytes, atomic_write_json, read_json, sha256_file
+from .goals import decode_cells
 from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, identity, read_manifest
 from .sampler import EpisodeBatch
 from .settings import GenerationSettings
@@ -90,6 +91,7 @@ def export_habitat(dataset: str | Path, out: str | Path) -> list[Path]:
                         "target_category": row["target_categories"][a],
                         "target_instance_id": int(row["target_instance_ids"][a]),
                         "start_floor": int(row["start_floors"][a]), "target_floor": int(row["target_floors"][a]),
+                        "target_region": [int(v) for v in row["target_regions"][a]],
                     },
                 },
                 "goals": [{"position": _floats(to_habitat(row["target_positions"][a])),
@@ -105,6 +107,8 @@ def export_habitat(dataset: str | Path, out: str | Path) -> list[Path]:
         written.append(path)
     for stale in sorted(set(out.glob("*_n*/*/*.json.gz")) - set(written)):  # from an earlier export here
         stale.unlink()
+    for entry in (manifest.navmeshes or {}).values():  # the navmeshes go with the episodes, as Habitat's do
+        atomic_write_bytes(out / entry["path"], (manifest.root / entry["path"]).read_bytes())
     from .shards import shard_report
 
     side = read_json(Path(dataset) / MANIFEST_NAME, what="episode data set manifest")
@@ -154,6 +158,13 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
     missing = set(by_shard) - {s["path"] for s in shards}
     if missing:
         raise DatasetError(f"episodes of shards the manifest does not list: {sorted(missing)[:3]}", path=src)
+    navmeshes = {}
+    for sid, entry in (doc.get("navmeshes") or {}).items():
+        file = src / entry["path"]
+        if not file.is_file() or sha256_file(file) != entry["sha256"]:
+            raise DatasetError(f"stored navmesh of {sid!r} ({entry['path']}) is missing or changed; export again",
+                               path=src)
+        navmeshes[entry["path"]] = file.read_bytes()
     tables = []
     for shard in shards:
         try:
@@ -171,16 +182,20 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
     if out.exists():
         import shutil
 
-        for child in out.glob("split=*"):
+        for child in [*out.glob("split=*"), *out.glob("navmesh")]:
             shutil.rmtree(child)
     atomic_write_json(out / LOCK_NAME, ident)
+    for rel, data in navmeshes.items():
+        atomic_write_bytes(out / rel, data)
+    nav_of = {sid: entry for sid, entry in (doc.get("navmeshes") or {}).items()}
     entries = []
     for shard, table, report in tables:
         path = out / shard["path"]
         write_shard(table, path, report)
         entries.append({**shard, "rows": table.num_rows, "sha256": sha256_file(path),
                         "reason": report.get("reason", ""), "rejections": report.get("rejections", {}),
-                        "point_goals": report.get("point_goals", "")})
+                        "point_goals": report.get("point_goals", "")}
+                       | ({"navmesh": nav_of[shard["scene_id"]]} if shard["scene_id"] in nav_of else {}))
     atomic_write_json(out / MANIFEST_NAME, build_manifest(ident, entries))
     (out / LOCK_NAME).unlink(missing_ok=True)
     return out
@@ -211,8 +226,9 @@ def _shard_table(eps: dict[str, list[dict]], shard: dict, settings: GenerationSe
             euc[k, a] = ep["info"]["euclidean_distance"]
             sfl[k, a], tfl[k, a] = mb["start_floor"], mb["target_floor"]
             tindex[k, a] = len(targets)
+            cells = decode_cells(np.asarray(mb["target_region"], dtype=np.int64))
             targets.append(Target(mb["target_instance_id"], mb["target_category"], -1, mb["target_floor"],
-                                  goals[k, a].reshape(1, 3)))
+                                  goals[k, a].reshape(1, 3), cells))
     tf_all = np.array([t.floor for t in targets], dtype=np.int64)
     batch = EpisodeBatch(starts=starts, yaws=yaws, targets=tuple(targets), target_index=tindex,
                          target_positions=goals, geodesic=geo, euclidean=euc, start_floors=sfl,

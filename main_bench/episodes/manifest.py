@@ -62,6 +62,8 @@ class Manifest:
     shortfalls: tuple[dict[str, Any], ...]
     manifest_hash: str
     navmesh_algorithm: int | None = None
+    #: Per scene, the navmesh the data set was made with: {"path": relative path, "sha256": file hash}.
+    navmeshes: dict[str, dict[str, str]] | None = None
 
     def navmesh_mismatch(self) -> str:
         """Why the data set's distances are not this toolkit's navmesh's ('' when they are): it was made with
@@ -71,11 +73,6 @@ class Manifest:
         if self.navmesh_algorithm in (None, ALGORITHM_VERSION):
             return ""
         return f"made with navmesh algorithm {self.navmesh_algorithm}, this main-bench has {ALGORITHM_VERSION}"
-
-    @property
-    def goal_radius(self) -> float:
-        """Goal radius of object targets (metres)."""
-        return self.settings.goal_radius
 
     @property
     def success_distance(self) -> float:
@@ -124,8 +121,10 @@ def build_manifest(ident: dict, shards: list[dict]) -> dict:
         if s.get("point_goals") and s["rows"]:
             entry = point_goals.setdefault(s["scene_id"], {"episodes": 0, "reason": s["point_goals"]})
             entry["episodes"] += s["rows"]
+    navmeshes = {s["scene_id"]: s["navmesh"] for s in sorted(shards, key=lambda s: s["scene_id"]) if "navmesh" in s}
     return {
         **ident,
+        "navmeshes": dict(sorted(navmeshes.items())),
         "toolkit_version": __version__,
         "seed": ident["settings"]["seed"],
         "episodes": sum(s["rows"] for s in shards),
@@ -146,6 +145,11 @@ def read_manifest(path: str | Path) -> Manifest:
                            "finish (run `main-bench episodes generate` again with the same options)", path=path)
     doc = read_json(file, what="episode data set manifest")
     check_schema_version(doc, EPISODES_SCHEMA_VERSION, file, "episode data set manifest")
+    if doc.get("schema_version") != EPISODES_SCHEMA_VERSION:
+        raise DatasetError(
+            f"episode data set schema_version {doc.get('schema_version')!r} is older than this main-bench's "
+            f"{EPISODES_SCHEMA_VERSION} (success regions and the navmesh are not stored in it); regenerate it with "
+            "`main-bench episodes generate` and the options recorded in its manifest, into a new --out", path=file)
     try:
         settings = GenerationSettings.from_json(doc["settings"])
         scenes = {sid: SceneEntry(scene_id=sid, split=e["split"], hash=e["hash"], source=e["source"],
@@ -158,7 +162,8 @@ def read_manifest(path: str | Path) -> Manifest:
                         shards=shards, shortfalls=tuple(doc.get("shortfalls", ())),
                         manifest_hash=sha256_file(file),
                         navmesh_algorithm=None if doc.get("navmesh_algorithm") is None
-                        else int(doc["navmesh_algorithm"]))
+                        else int(doc["navmesh_algorithm"]),
+                        navmeshes={k: dict(v) for k, v in doc["navmeshes"].items()})
     except (KeyError, TypeError, ValueError, InputError) as exc:
         raise DatasetError(f"malformed manifest ({type(exc).__name__}: {exc}); regenerate the data set",
                            path=file) from None

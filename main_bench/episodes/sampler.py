@@ -32,7 +32,7 @@ class EpisodeBatch:
     yaws: np.ndarray  # (E, N)
     targets: tuple[Target, ...]  # the targets the indices below refer to
     target_index: np.ndarray  # (E, N) into `targets`
-    target_positions: np.ndarray  # (E, N, 3) nearest goal point (Euclidean) to each start
+    target_positions: np.ndarray  # (E, N, 3) nearest region point (Euclidean) to each start, or the point goal
     geodesic: np.ndarray  # (E, N)
     euclidean: np.ndarray  # (E, N)
     start_floors: np.ndarray  # (E, N)
@@ -93,7 +93,8 @@ def _draw(bank: TargetBank, target: Target, pool: _Pool, n: int, settings: Gener
     """Draw `n` candidate starts for `target`, keep the valid ones in its pool."""
     nav = bank.navmesh
     dfield, tree = bank.field(target)
-    pts = np.asarray(nav.sample(n, rng, island=target.island), dtype=np.float64).reshape(-1, 3)
+    # Starts are stored as float32: measure from the stored value, so that l_i is exactly the start's distance.
+    pts = np.asarray(nav.sample(n, rng, island=target.island), dtype=np.float32).astype(np.float64).reshape(-1, 3)
     report.candidates += len(pts)
     pool.drawn += len(pts)
     geo = np.asarray(dfield.distance(pts), dtype=np.float64)
@@ -122,7 +123,9 @@ def _draw(bank: TargetBank, target: Target, pool: _Pool, n: int, settings: Gener
     idx = np.flatnonzero(ok)
     pool.accepted += len(idx)
     if len(idx):
-        pool.add((pts[idx], geo[idx], euc[idx], target.goal_points[np.asarray(j)[idx]], floors[idx]))
+        goal = (target.goal_points[np.asarray(j)[idx]] if target.position is None
+                else np.broadcast_to(target.position, (len(idx), 3)).copy())
+        pool.add((pts[idx], geo[idx], euc[idx], goal, floors[idx]))
     if pool.accepted == 0 and pool.drawn >= DEAD_AFTER:
         pool.dead = True
 

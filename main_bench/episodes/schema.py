@@ -14,8 +14,9 @@ from typing import Literal
 import numpy as np
 import pyarrow as pa
 
-#: Version of the episode rows and the manifest; readers refuse a newer one.
-EPISODES_SCHEMA_VERSION = 1
+#: Version of the episode rows and the manifest; readers refuse another one (2: success regions stored with
+#: each episode, the navmesh stored with the data set, l_i measured to the region).
+EPISODES_SCHEMA_VERSION = 2
 
 Task = Literal["shared", "individual"]
 TASKS: tuple[Task, ...] = ("shared", "individual")
@@ -37,6 +38,9 @@ ROW_SCHEMA = pa.schema(
         pa.field("target_instance_ids", pa.list_(pa.int32()), nullable=False),
         pa.field("target_positions", pa.list_(_vec3), nullable=False),
         pa.field("geodesic_distances", pa.list_(pa.float32()), nullable=False),
+        # Per agent: its target's success region, run-length encoded cell indices of the data set's stored
+        # navmesh ([start, length, ...], `goals.encode_cells`).
+        pa.field("target_regions", pa.list_(pa.list_(pa.int32())), nullable=False),
         pa.field("euclidean_distances", pa.list_(pa.float32()), nullable=False),
         pa.field("start_floors", pa.list_(pa.int16()), nullable=False),
         pa.field("target_floors", pa.list_(pa.int16()), nullable=False),
@@ -64,10 +68,11 @@ class Episode:
     target_categories: tuple[str, ...]
     target_instance_ids: tuple[int, ...]
     target_positions: np.ndarray  # (N, 3) metres
-    geodesic_distances: np.ndarray  # (N,) metres, l_i
+    geodesic_distances: np.ndarray  # (N,) metres, l_i: start to the nearest point of the success region
     euclidean_distances: np.ndarray  # (N,) metres
     start_floors: tuple[int, ...]
     target_floors: tuple[int, ...]
+    target_regions: tuple[np.ndarray, ...] = ()  # per agent, run-length encoded region cells (int32)
 
     @property
     def num_agents(self) -> int:
@@ -92,4 +97,5 @@ class Episode:
             euclidean_distances=np.asarray(row["euclidean_distances"], dtype=np.float64),
             start_floors=tuple(int(v) for v in row["start_floors"]),
             target_floors=tuple(int(v) for v in row["target_floors"]),
+            target_regions=tuple(np.asarray(r, dtype=np.int32) for r in row.get("target_regions") or ()),
         )

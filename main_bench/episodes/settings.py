@@ -20,9 +20,10 @@ class GenerationSettings:
     `per_scene`: episodes per (scene, task, agent count). `ratio_*`: Habitat PointNav's thinning of near-straight
     episodes: an agent whose geodesic/Euclidean ratio is below `ratio_threshold` is kept only with probability
     `ratio_keep_scale * (ratio - ratio_keep_offset)**2` (Habitat-lab's `_ratio_sample_rate`: 20, 0.98, 1.1);
-    `ratio_threshold = 0` turns the thinning off. `goal_radius`: an object's goal points are the navigable cells
-    within this horizontal distance of its footprint. `shard_size`: most episodes in one part file.
-    Task (recorded so evaluation uses the data set's own values): `success_distance`, `max_steps` per agent,
+    `ratio_threshold = 0` turns the thinning off. `min_island_area`: navmesh islands smaller than this (m^2:
+    counter tops, lift cars, closed bays) hold no start and no goal. `shard_size`: most episodes in one part file.
+    Task (recorded so evaluation uses the data set's own values): `success_distance` (the radius of the success
+    regions, `goals.py`), `max_steps` per agent,
     `forward_step` (m) and `turn_angle_deg` of the actions, and the camera: `camera_width` x `camera_height`
     pixels, `camera_hfov_deg`, `camera_height_m` above the feet, `max_depth` (m).
     """
@@ -33,13 +34,12 @@ class GenerationSettings:
     min_distance: float = 2.0
     max_distance: float = 20.0
     success_distance: float = 1.0
-    goal_radius: float = 0.5
     start_margin: float = 0.1
     cross_floor: bool = False
     ratio_threshold: float = 1.1
     ratio_keep_scale: float = 20.0
     ratio_keep_offset: float = 0.98
-    min_island_area: float = 2.0
+    min_island_area: float = 10.0
     point_goal_episodes: int = 10
     max_rounds: int = 8
     shard_size: int = 50_000
@@ -66,7 +66,7 @@ class GenerationSettings:
         if not (0 <= self.min_distance < self.max_distance) or not math.isfinite(self.max_distance):
             raise InputError(
                 f"need 0 <= --min-distance < --max-distance (finite), got {self.min_distance} and {self.max_distance}")
-        for name in ("success_distance", "goal_radius", "start_margin", "min_island_area", "ratio_keep_scale",
+        for name in ("success_distance", "start_margin", "min_island_area", "ratio_keep_scale",
                      "ratio_threshold", "ratio_keep_offset"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):

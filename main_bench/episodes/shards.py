@@ -15,6 +15,7 @@ import pyarrow.parquet as pq
 
 from ..errors import DatasetError
 from ..io import atomic_path
+from .goals import encode_cells
 from .sampler import EpisodeBatch
 from .schema import ROW_SCHEMA
 
@@ -59,11 +60,24 @@ def batch_table(batch: EpisodeBatch, scene_id: str, scene_hash: str, task: str, 
         _nested(inst[idx].astype(np.int32), pa.int32(), None),
         _nested(batch.target_positions.astype(np.float32), pa.float32(), 3),
         _nested(batch.geodesic.astype(np.float32), pa.float32(), None),
+        _regions(batch),
         _nested(batch.euclidean.astype(np.float32), pa.float32(), None),
         _nested(batch.start_floors.astype(np.int16), pa.int16(), None),
         _nested(batch.target_floors.astype(np.int16), pa.int16(), None),
     ]
     return pa.Table.from_arrays(columns, schema=ROW_SCHEMA)
+
+
+def _regions(batch: EpisodeBatch) -> pa.Array:
+    """Per episode and agent the run-length coded success region of its target (list<list<int32>>)."""
+    e, n = batch.target_index.shape
+    codes = [encode_cells(t.cells) for t in batch.targets]
+    per_agent = [codes[int(k)] for k in batch.target_index.reshape(-1)]
+    lengths = np.array([len(c) for c in per_agent], dtype=np.int64)
+    inner_off = np.concatenate(([0], np.cumsum(lengths))).astype(np.int32)
+    flat = np.concatenate(per_agent).astype(np.int32) if per_agent else np.zeros(0, dtype=np.int32)
+    inner = pa.ListArray.from_arrays(pa.array(inner_off), pa.array(flat, type=pa.int32()))
+    return pa.ListArray.from_arrays(pa.array(np.arange(0, (e + 1) * n, n, dtype=np.int32)), inner)
 
 
 def write_shard(table: pa.Table, path: Path, report: dict) -> None:

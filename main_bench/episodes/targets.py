@@ -1,7 +1,9 @@
 """The targets of one scene: object goals (from its semantic objects) or navigable point goals.
 
-A `TargetBank` lists a scene's usable targets with their island, floor and goal points, and builds each target's
-distance field once, on first use, together with a k-d tree of its goal points for Euclidean distances.
+A `TargetBank` lists a scene's usable targets with their island, floor and success region (`goals.py`), and
+builds each target's distance field (to its region) once, on first use, together with a k-d tree of the region's
+points for Euclidean distances. Targets whose region lies on an island under `min_island_area` m^2 are left out,
+and starts are drawn on the target's island, so such islands hold neither starts nor goals.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..scenes.objects import KNOWN_CATEGORIES
-from .goals import goal_points
+from .goals import object_region, point_region, scene_triangles
 from .settings import GenerationSettings
 
 if TYPE_CHECKING:
@@ -23,13 +25,19 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, eq=False)
 class Target:
-    """One target: an object instance (category, instance id) or a point goal (category "", instance id -1)."""
+    """One target: an object instance (category, instance id) or a point goal (category "", instance id -1).
+
+    `cells`: its success region as sorted navmesh cell indices; `goal_points` the same cells' centres;
+    `position`: the point goal itself (None for an object).
+    """
 
     instance_id: int
     category: str
     island: int
     floor: int
     goal_points: np.ndarray  # (G, 3) metres, canonical frame
+    cells: np.ndarray  # (G,) int64
+    position: np.ndarray | None = None  # (3,) metres
 
 
 class TargetBank:
@@ -45,22 +53,24 @@ class TargetBank:
         self._fields: dict[int, tuple[DistanceField, cKDTree]] = {}
         areas = {int(isl.index): float(isl.area) for isl in navmesh.islands}
         self._island_area = areas
+        all_cells = np.asarray(navmesh.cells(), dtype=np.float64).reshape(-1, 3)
+        cell_island = np.asarray(navmesh.cell_island())
+        triangles = scene_triangles(scene) if scene.objects else np.zeros((0, 3, 3))
         for obj in sorted(scene.objects, key=lambda o: o.instance_id):
             if obj.category not in KNOWN_CATEGORIES:  # a target observation is an index into KNOWN_CATEGORIES
                 self._exclude("object of a category the toolkit does not know (kept in the sidecar)")
                 continue
-            points = goal_points(navmesh, obj, settings)
-            if len(points) == 0:
-                self._exclude("object without a navigable goal point")
+            cells = object_region(navmesh, obj, triangles, settings)
+            if len(cells) == 0:
+                self._exclude("object not visible from any navigable cell within the success distance")
                 continue
-            island = int(np.asarray(navmesh.island_of(points[:1]))[0])
-            if island < 0:
-                self._exclude("object without a navigable goal point")
-                continue
+            island = int(cell_island[cells[0]])
             if areas.get(island, 0.0) < settings.min_island_area:
                 self._exclude(f"object on an island under {settings.min_island_area:g} m^2")
                 continue
-            self.objects.append(Target(obj.instance_id, obj.category, island, _mode(navmesh.floor_of(points)), points))
+            points = all_cells[cells]
+            self.objects.append(Target(obj.instance_id, obj.category, island, _mode(navmesh.floor_of(points)),
+                                       points, cells))
 
     def point_goal_reason(self) -> str:
         """Why this scene's episodes have point goals: what its semantic objects are missing."""
@@ -87,13 +97,16 @@ class TargetBank:
             floors = np.asarray(self.navmesh.floor_of(points))
             for p, isl, fl in zip(points, islands, floors, strict=True):
                 if len(out) < count and int(isl) in big:
-                    out.append(Target(-1, "", int(isl), int(fl), p.reshape(1, 3).copy()))
+                    cells = point_region(self.navmesh, p, self.settings)
+                    if len(cells):
+                        pts = np.asarray(self.navmesh.cells(), dtype=np.float64)[cells]
+                        out.append(Target(-1, "", int(isl), int(fl), pts, cells, p.copy()))
             if len(out) >= count:
                 break
         return out
 
     def field(self, target: Target) -> tuple[DistanceField, cKDTree]:
-        """The target's distance field and the k-d tree of its goal points (cached for object targets)."""
+        """The distance field to the target's region and the k-d tree of its points (cached for object targets)."""
         hit = self._fields.get(target.instance_id) if target.instance_id >= 0 else None
         if hit is None:
             hit = (self.navmesh.distance_field(target.goal_points), cKDTree(target.goal_points))

@@ -117,7 +117,7 @@ def check_rows(table: pa.Table, entry: ShardEntry, manifest: Manifest, report: V
     n = entry.agents
     lengths_ok = np.ones(table.num_rows, dtype=bool)
     for name in ("start_positions", "start_yaws", "target_categories", "target_instance_ids", "target_positions",
-                 "geodesic_distances", "euclidean_distances", "start_floors", "target_floors"):
+                 "geodesic_distances", "euclidean_distances", "start_floors", "target_floors", "target_regions"):
         lengths_ok &= pc.list_value_length(table.column(name).combine_chunks()).to_numpy(zero_copy_only=False) == n
     num = table.column("num_agents").to_numpy()
     bad(~lengths_ok | (num != n), "agent count", f"lists or num_agents differ from N={n} of the partition")
@@ -177,6 +177,22 @@ def check_stray_files(root: Path, manifest: Manifest, report: ValidationReport) 
             report.add("stray file", "Parquet file not listed in the manifest", rel)
 
 
+def check_navmeshes(root: Path, manifest: Manifest, report: ValidationReport) -> None:
+    """Every scene's stored navmesh is there and has the SHA-256 the manifest records."""
+    stored = manifest.navmeshes or {}
+    for scene_id in sorted(manifest.scenes):
+        entry = stored.get(scene_id)
+        if entry is None:
+            if any(s.scene_id == scene_id for s in manifest.shards):
+                report.add("navmesh", f"no stored navmesh recorded for scene {scene_id!r}")
+            continue
+        path = root / entry["path"]
+        if not path.is_file():
+            report.add("navmesh", f"stored navmesh of {scene_id!r} is missing", entry["path"])
+        elif sha256_file(path) != entry["sha256"]:
+            report.add("navmesh", f"stored navmesh of {scene_id!r} differs from its recorded SHA-256", entry["path"])
+
+
 def check_duplicates(ids: list[str], shard_of: list[str], report: ValidationReport) -> None:
     """Episode ids that occur more than once in the data set."""
     counts = Counter(ids)
@@ -221,6 +237,7 @@ def validate_dataset(dataset: str | Path, *, recheck: bool = False, sample: int 
         readable.append((entry, table.num_rows))
     check_duplicates(ids, shard_of, report)
     check_stray_files(root, manifest, report)
+    check_navmeshes(root, manifest, report)
     if recheck:
         from .recheck import recheck_distances
 

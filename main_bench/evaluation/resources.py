@@ -41,17 +41,15 @@ class EpisodeResources:
         self._field_bytes = 0
 
     def scene(self, scene_id: str) -> tuple[Any, Any]:
-        """(Scene, NavMesh) of `scene_id`, built with the data set's navmesh settings (cached on disk)."""
+        """(Scene, NavMesh) of `scene_id`: the navmesh is the one stored in the data set (`load_navmesh`)."""
         if scene_id not in self._scenes:
-            from ..episodes.dataset import resolve_scene
-            from ..navmesh import NavMesh
+            from ..episodes.dataset import load_navmesh, resolve_scene
             from ..scenes.loader import load_scene
 
             entry = self.manifest.scenes.get(scene_id)
             path = resolve_scene(self.manifest, scene_id, self.cache_dir)
             scene = load_scene(path, up=getattr(entry, "up", "auto") or "auto")
-            navmesh = NavMesh.build_cached(scene, self.manifest.navmesh(), self._navmesh_cache())
-            self._scenes[scene_id] = (scene, navmesh)
+            self._scenes[scene_id] = (scene, load_navmesh(self.manifest, scene_id))
         return self._scenes[scene_id]
 
     def _navmesh_cache(self) -> Path:
@@ -86,29 +84,30 @@ class EpisodeResources:
         return self._plan_navmeshes[scene_id]
 
     def fields(self, episode: Episode, planning: bool = False) -> list[Any]:
-        """Each agent's target distance field (on the planning navmesh when `planning`; None where the
-        target has no goal point there)."""
-        from ..episodes.goals import target_field
-        from ..errors import InputError
+        """Each agent's distance field to its target's stored success region (on the planning navmesh when
+        `planning`: to the same region's points; None where none of them is on it)."""
+        from ..episodes.goals import decode_cells, region_field
 
-        scene, navmesh = self.scene(episode.scene_id)
-        mesh = self._plan_navmesh(episode.scene_id) if planning else navmesh
+        _, navmesh = self.scene(episode.scene_id)
         out = []
         for i in range(episode.num_agents):
             key = (episode.scene_id, planning, target_key(episode, i))
             if key in self._fields:
                 self._fields.move_to_end(key)
             else:
-                inst = int(episode.target_instance_ids[i])
-                target = inst if inst >= 0 else np.asarray(episode.target_positions[i], dtype=np.float64)
-                try:
-                    field = target_field(mesh, scene, target, self.manifest)
-                    if planning and not np.any(field.reachable_targets):
+                if i >= len(episode.target_regions):
+                    from ..errors import DatasetError
+
+                    raise DatasetError(f"episode {episode.episode_id!r} stores no success region for agent {i}; "
+                                       "regenerate the data set", path=self.manifest.root)
+                cells = decode_cells(episode.target_regions[i])
+                if planning:
+                    points = np.asarray(navmesh.cells(), dtype=np.float64)[cells]
+                    field = self._plan_navmesh(episode.scene_id).distance_field(points)
+                    if not np.any(field.reachable_targets):
                         field = None
-                except InputError:
-                    if not planning:
-                        raise
-                    field = None
+                else:
+                    field = region_field(navmesh, cells)
                 self._fields[key] = field
                 self._field_bytes += _nbytes(field)
                 while self._field_bytes > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:

@@ -1,7 +1,8 @@
 """The task rules and the simulator settings of a data set, read from its manifest.
 
 Every submission is scored with the data set's own values: agent radius, height and max climb (its navmesh
-settings), success distance, max steps per agent, the actions' step and turn, and the camera (its generation
+settings), success regions (stored with the episodes; a `found` call is correct within one navmesh cell of
+the region), max steps per agent, the actions' step and turn, and the camera (its generation
 settings; reading a manifest written before these were recorded fills in `GenerationSettings`' defaults,
 DESIGN.md's: 500 steps, 0.25 m, 30 deg, 128 x 128, hfov 90 deg at 1.25 m, depth to 10 m).
 """
@@ -20,11 +21,20 @@ def max_steps_of(manifest: Any) -> int:
     return int(manifest.settings.max_steps)
 
 
+def found_tolerance(manifest: Any) -> float:
+    """Geodesic distance (m) to a target's stored success region within which a `found` call is correct: one
+    cell of the data set's navmesh (`episodes.goals.success_tolerance`)."""
+    from ..episodes.goals import success_tolerance
+
+    return success_tolerance(float(manifest.navmesh().cell_size))
+
+
 def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
-    """`TaskRules` for `task` with the data set's success distance (metres) and max steps."""
+    """`TaskRules` for `task`: distances are to the success regions the data set stores (the success distance is
+    in the regions), so a call is correct within `found_tolerance`; the data set's max steps."""
     from ..sim.task import TaskRules
 
-    return TaskRules(task=task, success_distance=float(manifest.success_distance), max_steps=max_steps_of(manifest))
+    return TaskRules(task=task, success_distance=found_tolerance(manifest), max_steps=max_steps_of(manifest))
 
 
 def sim_settings_from_manifest(manifest: Any, renderer: str, gpu: int | None = None) -> Any:
@@ -44,8 +54,10 @@ def sim_settings_from_manifest(manifest: Any, renderer: str, gpu: int | None = N
 def rules_json(manifest: Any) -> dict[str, Any]:
     """The rules as recorded in summary.json (`task_rules`)."""
     sim = sim_settings_from_manifest(manifest, "auto")
-    return {"success_distance": float(manifest.success_distance), "max_steps": max_steps_of(manifest),
-            "goal_radius": float(manifest.goal_radius), "agent_radius": sim.agent_radius,
+    return {"success_distance": float(manifest.success_distance), "found_tolerance": found_tolerance(manifest),
+            "success_region": "navigable cells within success_distance of the object's footprint that see it "
+                              "(point goal: geodesic); l_i and d_i are measured to the region",
+            "max_steps": max_steps_of(manifest), "agent_radius": sim.agent_radius,
             "agent_height": sim.agent_height, "max_climb": sim.max_climb, "forward_step": sim.forward_step,
             "turn_angle_deg": sim.turn_angle_deg, "camera": {"width": sim.camera.width, "height": sim.camera.height,
             "hfov_deg": sim.camera.hfov_deg, "height_m": sim.camera.height_m, "max_depth": sim.camera.max_depth}}

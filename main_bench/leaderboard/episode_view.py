@@ -83,18 +83,13 @@ def _find_episode(dataset: Path, results: Results, episode_id: str) -> Episode:
 
 
 def _shortest(scene: Any, navmesh: Any, dataset: Path, ep: Episode, i: int) -> np.ndarray | None:
-    """Agent i's shortest path: to its object's nearest goal point (target_field), else to the target point."""
+    """Agent i's shortest path to its target's stored success region (on the data set's stored navmesh)."""
+    from ..episodes.goals import decode_cells, region_field
+
     start = ep.start_positions[i]
     try:
-        inst = ep.target_instance_ids[i]
-        if inst >= 0:
-            from ..episodes.dataset import read_manifest
-            from ..episodes.goals import target_field
-
-            path = target_field(navmesh, scene, int(inst), read_manifest(dataset).settings).path(start)
-        else:
-            path = navmesh.shortest_path(start, ep.target_positions[i])
-    except MainBenchError:
+        path = region_field(navmesh, decode_cells(ep.target_regions[i])).path(start)
+    except (MainBenchError, IndexError):
         try:
             path = navmesh.shortest_path(start, ep.target_positions[i])
         except MainBenchError:

@@ -6,6 +6,7 @@ import hashlib
 import io
 import json
 import math
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -67,6 +68,20 @@ def build_key(geom_hash: str, settings: NavMeshSettings, algorithm: int = ALGORI
     """Cache key: geometry, settings and algorithm version (this toolkit's unless given)."""
     doc = {"geometry": geom_hash, "settings": settings.to_json(), "algorithm": algorithm}
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+
+
+def _npz_bytes(**arrays: np.ndarray) -> bytes:
+    """A compressed NumPy archive of `arrays` whose bytes depend only on the arrays (no zip timestamps), so a
+    navmesh file's SHA-256 identifies its content."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for name, arr in arrays.items():
+            one = io.BytesIO()
+            np.lib.format.write_array(one, np.ascontiguousarray(arr), allow_pickle=False)
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            info.compress_type = zipfile.ZIP_DEFLATED
+            zf.writestr(info, one.getvalue())
+    return buf.getvalue()
 
 
 class NavMesh:
@@ -166,13 +181,12 @@ class NavMesh:
                                                           "nx": g.nx, "ny": g.ny},
             "floors": [[f.z, f.area] for f in self.floors],
         }
-        buf = io.BytesIO()
-        np.savez_compressed(buf, meta=np.frombuffer(json.dumps(meta).encode(), np.uint8),
-                            ix=g.ix.astype(np.int32), iy=g.iy.astype(np.int32), z=g.z, zs=g.zs,
-                            nbr=g.nbr.astype(np.int32), island=g.island.astype(np.int32),
-                            ox=self._ax - self._px, oy=self._ay - self._py)
+        data = _npz_bytes(meta=np.frombuffer(json.dumps(meta, sort_keys=True).encode(), np.uint8),
+                          ix=g.ix.astype(np.int32), iy=g.iy.astype(np.int32), z=g.z, zs=g.zs,
+                          nbr=g.nbr.astype(np.int32), island=g.island.astype(np.int32),
+                          ox=self._ax - self._px, oy=self._ay - self._py)
         with atomic_path(path) as tmp:
-            tmp.write_bytes(buf.getvalue())
+            tmp.write_bytes(data)
 
     @classmethod
     def load(cls, path: str | Path) -> NavMesh:

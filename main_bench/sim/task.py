@@ -4,7 +4,9 @@ Exactly DESIGN.md "Episode end and success", plus the rule for calls made in the
 
 - Every agent acts once per step; all actions of a step happen together. An agent that calls `found` does
   not move in that step, is done, and its call is correct when its geodesic distance to its target (after
-  the step, which for it is where it called) is at most the success distance.
+  the step, which for it is where it called) is at most `TaskRules.success_distance`. The evaluator measures
+  distances to the target's success region (`episodes/goals.py`) and sets this to the region's tolerance,
+  one navmesh cell.
 - An agent that has taken `max_steps` actions without calling `found` is done and failed (timed out). A
   done agent stays where it is, as an obstacle.
 - Shared target: the episode ends after the first step in which any agent calls `found`, or when every
@@ -30,7 +32,9 @@ TASK_NAMES = ("shared", "individual")
 
 @dataclass(frozen=True)
 class TaskRules:
-    """The rule settings of one data set: the sub-task, success distance (metres, geodesic), max steps per agent."""
+    """The rule settings of one data set: the sub-task, max steps per agent, and `success_distance`: the geodesic
+    distance (metres) to the agent's target within which a `found` call is correct (the evaluator's targets are
+    success regions and this is their tolerance, one navmesh cell; `task_rules.rules_from_manifest`)."""
 
     task: str
     success_distance: float = 1.0

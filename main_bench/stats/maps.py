@@ -32,21 +32,16 @@ class SceneMap:
 
 
 def scene_and_navmesh(dataset: str | Path, scene_id: str, cache_dir: str | Path | None = None):
-    """(scene, navmesh) of one of the data set's scenes; the navmesh is built (or read from the cache) with the
-    data set's own settings. Raises DatasetError when the scene file is missing or changed."""
-    from ..episodes.dataset import read_manifest, resolve_scene
-    from ..navmesh import NavMesh
+    """(scene, navmesh) of one of the data set's scenes; the navmesh is the one stored in the data set. Raises
+    DatasetError when the scene file or the stored navmesh is missing or changed."""
+    from ..episodes.dataset import load_navmesh, read_manifest, resolve_scene
     from ..scenes.loader import load_scene
 
     manifest = read_manifest(dataset)
     entry = manifest.scenes.get(scene_id)
     path = resolve_scene(manifest, scene_id, cache_dir)
     scene = load_scene(path, up=getattr(entry, "up", "auto") or "auto")
-    if cache_dir is None:
-        from ..scenes.builtin import default_cache_dir
-
-        cache_dir = default_cache_dir()
-    return scene, NavMesh.build_cached(scene, manifest.navmesh(), Path(cache_dir) / "navmesh")
+    return scene, load_navmesh(manifest, scene_id)
 
 
 def scene_map(dataset: str | Path, scene_id: str, cache_dir: str | Path | None, enabled: bool) -> SceneMap:
