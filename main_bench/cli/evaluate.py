@@ -86,7 +86,8 @@ def evaluate(
     renderer: str = typer.Option("auto", "--renderer", help="auto, gl or tiny."),
     gpu: int | None = typer.Option(None, "--gpu", help="GPU index: gl renders on EGL device N, torch policies "
                                    "get MAIN_BENCH_TORCH_DEVICE=cuda:N."),
-    limit: int | None = typer.Option(None, "--limit", help="At most N episodes per split/task/agents track."),
+    limit: int | None = typer.Option(None, "--limit", help="At most N episodes per split/task/agents track: a seeded sample "
+                                     "stratified by scene (default: the whole split)."),
     executor: str = typer.Option("local", "--executor", help="local or ray."),
     seed: int = typer.Option(0, "--seed", help="Evaluation seed (policy seeds derive from it and episode ids)."),
     track: str = typer.Option("egocentric", "--track", help="Sensor track: egocentric or gps."),

@@ -132,6 +132,7 @@ def _stored_navmesh(spec: dict[str, Any], built: tuple[Any, Any]) -> Any:
     then samples on the published file's navmesh, so all distances of a data set come from the navmesh it
     stores, bit for bit, whichever machine built it.
     """
+    import contextlib
     import os
     import tempfile
 
@@ -146,10 +147,8 @@ def _stored_navmesh(spec: dict[str, Any], built: tuple[Any, Any]) -> Any:
             built[1].save(tmp)
             with open(tmp, "rb") as fh:
                 os.fsync(fh.fileno())
-            try:
+            with contextlib.suppress(FileExistsError):  # another unit published first: use its file
                 os.link(tmp, path)
-            except FileExistsError:
-                pass
         finally:
             Path(tmp).unlink(missing_ok=True)
     return NavMesh.load(path)

@@ -1,6 +1,7 @@
 """Fixed chunks of episodes: the unit of work, of part files and of resumption.
 
-Episodes of each track (`split/task/agents`) are sorted by id, cut to `--limit`, and split into chunks of
+Episodes of each track (`split/task/agents`), all of them or the `--limit` sample (`subset.py`, stratified by
+scene), are sorted by id and split into chunks of
 `chunk_size`; chunk k of a track writes `part-k` of its records and trajectories. The chunks do not depend on
 `--workers` or the executor, so neither do the files. A chunk is finished when its ledger entry exists (written
 atomically after its trajectories and records parts, with their hashes: `ledger.py`); a restarted run skips
@@ -13,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .results import partition_dir
+from .subset import stratified_sample
 
 
 @dataclass(frozen=True)
@@ -44,10 +46,11 @@ class Chunk:
 
 
 def make_chunks(split: str, task: str, agents: int, episode_ids: list[str], chunk_size: int,
-                limit: int | None) -> list[Chunk]:
-    """The chunks of one track: ids sorted, the first `limit` kept, cut into runs of `chunk_size`."""
-    ids = sorted(episode_ids)
-    if limit is not None:
-        ids = ids[:limit]
+                limit: int | None, scenes: list[str] | None = None, seed: int = 0) -> list[Chunk]:
+    """The chunks of one track: all ids, or the `limit` sample stratified by `scenes` (the scene of each id;
+    default: the id's scene prefix), sorted and cut into runs of `chunk_size`."""
+    if scenes is None:
+        scenes = [str(i).rsplit("/", 3)[0] for i in episode_ids]
+    ids = stratified_sample(list(episode_ids), list(scenes), limit, seed, f"{split}/{task}/{int(agents)}")
     return [Chunk(split, task, int(agents), k, tuple(ids[s:s + chunk_size]))
             for k, s in enumerate(range(0, len(ids), chunk_size))]

@@ -172,30 +172,3 @@ def episode_metrics(
         "called_found": bool((found_steps >= 0).any()),
     }
     return agents, team
-
-
-def bootstrap_ci(
-    values: np.ndarray, seed: int, n_resamples: int = 2000, level: float = 0.95
-) -> tuple[float, float, float]:
-    """(mean, low, high): the mean of `values` and its percentile bootstrap confidence interval.
-
-    Deterministic for a given seed. One value gives (v, v, v); no values raises ValueError.
-    """
-    v = np.asarray(values, dtype=np.float64).ravel()
-    if v.size == 0:
-        raise ValueError("bootstrap_ci needs at least one value")
-    if not 0 < level < 1:
-        raise ValueError(f"level must be in (0, 1), got {level}")
-    mean = float(v.mean())
-    if v.size == 1 or np.all(v == v[0]):
-        return mean, mean, mean
-    rng = np.random.default_rng(seed)
-    means = np.empty(n_resamples)
-    batch = max(1, min(n_resamples, 4_000_000 // v.size))
-    for start in range(0, n_resamples, batch):
-        k = min(batch, n_resamples - start)
-        idx = rng.integers(0, v.size, size=(k, v.size))
-        means[start:start + k] = v[idx].mean(axis=1)
-    alpha = (1.0 - level) / 2.0
-    lo, hi = np.quantile(means, [alpha, 1.0 - alpha])
-    return mean, float(min(lo, mean)), float(max(hi, mean))

@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import pyarrow as pa
 
-#: Version of the records, trajectories and summary.json; readers refuse a newer one.
-RESULTS_SCHEMA_VERSION = 2  # 2: summary.json carries `files` (SHA-256 of every part) and settings.sandbox
+#: Version of the records, trajectories and summary.json; readers refuse a newer one. 2: summary.json carries
+#: `files` (SHA-256 of every part) and settings.sandbox; 3: distances to success regions, intervals resampling
+#: episodes with Wilson intervals for success, the scored episode ids listed.
+RESULTS_SCHEMA_VERSION = 3
 TEAM = -1
 
 RECORD_SCHEMA = pa.schema(

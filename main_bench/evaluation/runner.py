@@ -89,8 +89,10 @@ def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
     for task, agents in chosen:
         table = load_table(settings.episodes, settings.split, task, agents).select(["episode_id", "scene_id"])
         ids = table.column("episode_id").to_pylist()
-        scene_of.update(zip(ids, table.column("scene_id").to_pylist(), strict=True))
-        chunks.extend(make_chunks(settings.split, task, agents, ids, settings.chunk_size, settings.limit))
+        scenes = table.column("scene_id").to_pylist()
+        scene_of.update(zip(ids, scenes, strict=True))
+        chunks.extend(make_chunks(settings.split, task, agents, ids, settings.chunk_size, settings.limit, scenes,
+                                  settings.seed))
     # Run order only (files do not depend on it): a scene's chunks together, so that a worker keeps its scene's
     # simulator and target fields, and consecutive chunks go to the same worker (see `executors.run_local`).
     chunks.sort(key=lambda c: (scene_of[c.episode_ids[0]], c.task, c.agents, c.part))

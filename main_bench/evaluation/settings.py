@@ -56,7 +56,8 @@ class PolicyLimits:
 class EvalSettings:
     """One evaluation run. Paths as given; `tasks`/`agents` None mean every task / team size in the split.
 
-    `limit`: at most this many episodes per (task, agents) track, the first by episode id. `chunk_size`:
+    `limit`: at most this many episodes per (task, agents) track, a seeded sample stratified by scene
+    (`subset.py`). `chunk_size`:
     episodes per part file; fixed chunks make a run resumable and its files independent of `workers`.
     `gpu`: device index for the gl renderer (EGL device) and for torch policies (`cuda:gpu`, given to the
     policy process as MAIN_BENCH_TORCH_DEVICE); None: EGL's default display and the policy's own choice.

@@ -1,14 +1,17 @@
-"""`summary.json`: means with 95% bootstrap confidence intervals per track, counts and failures.
+"""`summary.json`: means with 95% confidence intervals per track, the episodes scored, counts and failures.
 
 A pure function of the metric records (plus the run's metadata), so it can be rebuilt from a results directory.
-Track keys are `<split>/<task>/<agents>`. Each track holds `episodes`, `failed_episodes`, and for the team rows
-(`team`) and the agent rows (`agent`) each metric's `{mean, ci_low, ci_high}`, and `communication`: messages and
-bytes sent and the mean bytes per agent-step (also for the whole run at the top level).
+Track keys are `<split>/<task>/<agents>`. Each track holds `episodes`, `failed_episodes`, `episode_ids` (the
+episodes scored, sorted), and for the team rows (`team`) and the agent rows (`agent`) each metric's
+`{mean, ci_low, ci_high, count}`: a bootstrap interval resampling whole episodes (`intervals.py`, seeded by
+`interval_seed(seed, track, "team:<metric>")`, the leaderboard's rule too); `success` also carries the Wilson
+score interval `wilson_low`, `wilson_high` with the episodes as trials.
+Each track also holds `communication`: messages and bytes sent and the mean bytes per agent-step (also for
+the whole run at the top level).
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
 from typing import Any
 
@@ -16,7 +19,8 @@ import numpy as np
 import pandas as pd
 
 from .channel import communication_stats
-from .metrics import AGENT_METRICS, TEAM_METRICS, bootstrap_ci
+from .intervals import cluster_bootstrap_ci, interval_seed, wilson_interval
+from .metrics import AGENT_METRICS, TEAM_METRICS
 from .records import RESULTS_SCHEMA_VERSION, TEAM
 
 #: Failures listed one by one in summary.json (the rest are counted).
@@ -28,17 +32,23 @@ def track_key(split: str, task: str, agents: int) -> str:
     return f"{split}/{task}/{int(agents)}"
 
 
-def _ci_seed(seed: int, key: str, metric: str) -> int:
-    digest = hashlib.sha256(f"{seed}\0{key}\0{metric}".encode()).digest()
-    return int.from_bytes(digest[:8], "little")
-
-
-def _stats(values: np.ndarray, seed: int) -> dict[str, float | None]:
-    finite = values[np.isfinite(values)]
-    if finite.size == 0:
-        return {"mean": None, "ci_low": None, "ci_high": None, "count": 0}
-    mean, lo, hi = bootstrap_ci(finite, seed)
-    return {"mean": mean, "ci_low": lo, "ci_high": hi, "count": int(finite.size)}
+def metric_stats(values: np.ndarray, episodes: np.ndarray, metric: str, seed: int) -> dict[str, float | None]:
+    """Mean, episode-resampling bootstrap interval and row count of one metric's rows (`episodes[i]`: the
+    episode id of row i; non-finite values left out); a success rate adds its Wilson interval."""
+    values = np.asarray(values, dtype=np.float64)
+    episodes = np.asarray(episodes).astype(str)
+    ok = np.isfinite(values)
+    if not ok.any():
+        out: dict[str, float | None] = {"mean": None, "ci_low": None, "ci_high": None, "count": 0}
+        if metric == "success":
+            out |= {"wilson_low": None, "wilson_high": None}
+        return out
+    mean, lo, hi = cluster_bootstrap_ci(values[ok], episodes[ok], seed)
+    out = {"mean": mean, "ci_low": lo, "ci_high": hi, "count": int(ok.sum())}
+    if metric == "success":
+        w_lo, w_hi = wilson_interval(mean, len(np.unique(episodes[ok])))
+        out |= {"wilson_low": w_lo, "wilson_high": w_hi}
+    return out
 
 
 def track_stats(records: pd.DataFrame, key: str, seed: int) -> dict[str, Any]:
@@ -49,10 +59,11 @@ def track_stats(records: pd.DataFrame, key: str, seed: int) -> dict[str, Any]:
         "episodes": int(len(team)),
         "failed_episodes": int((team["failure"] != "").sum()),
         "communication": communication_stats(records),
-        "team": {m: _stats(team[m].to_numpy(dtype=np.float64), _ci_seed(seed, key, "team:" + m))
-                 for m in TEAM_METRICS},
-        "agent": {m: _stats(agent[m].to_numpy(dtype=np.float64), _ci_seed(seed, key, "agent:" + m))
-                  for m in AGENT_METRICS},
+        "episode_ids": sorted(str(e) for e in team["episode_id"]),
+        "team": {m: metric_stats(team[m].to_numpy(dtype=np.float64), team["episode_id"].to_numpy(), m,
+                                 interval_seed(seed, key, "team:" + m)) for m in TEAM_METRICS},
+        "agent": {m: metric_stats(agent[m].to_numpy(dtype=np.float64), agent["episode_id"].to_numpy(), m,
+                                  interval_seed(seed, key, "agent:" + m)) for m in AGENT_METRICS},
     }
 
 

@@ -17,8 +17,26 @@ def fmt_value(metric: str, value: float) -> str:
 
 
 def fmt_estimate(metric: str, est: Estimate) -> tuple[str, str]:
-    """(mean, "[lo, hi]") as printed."""
-    return fmt_value(metric, est.mean), f"[{fmt_value(metric, est.lo)}, {fmt_value(metric, est.hi)}]"
+    """(mean, "[lo, hi]") as printed; a success rate adds its Wilson interval, "[lo, hi] W[lo, hi]"."""
+    ci = f"[{fmt_value(metric, est.lo)}, {fmt_value(metric, est.hi)}]"
+    if est.wilson is not None:
+        ci += f" W[{fmt_value(metric, est.wilson[0])}, {fmt_value(metric, est.wilson[1])}]"
+    return fmt_value(metric, est.mean), ci
+
+
+#: How the comparison of a track entry with the next one is printed.
+VERSUS = {"tie": "= tie", "significant": "> (significant)", "not significant": "≈ (not significant)", "": ""}
+
+
+def intervals_note(settings) -> str:
+    """The sentence under every report saying what the intervals and the comparison column are."""
+    return (f"Each cell: team mean over episodes and its {settings.level:.0%} bootstrap confidence interval "
+            f"[low, high] resampling episodes ({settings.n_resamples} resamples, seeded per track and metric from "
+            f"seed {settings.seed}, as summary.json); success also shows its Wilson score interval W[low, high] "
+            "(episodes as trials). Tracks are ranked by team SPL; 'vs next' says whether a method's team SPL "
+            "differs from the next method's by a paired bootstrap over the episodes both were scored on "
+            "(95% interval of the difference excludes 0). Success, SPL and soft SPL in percent; distance to goal "
+            "in metres; episode length in steps.")
 
 
 def metric_title(metric: str, title: str) -> str:

@@ -11,7 +11,7 @@ from html import escape
 
 from .. import __version__
 from ..evaluation.task_rules import describe_rules
-from .format import fmt_bytes, fmt_estimate, metric_title, track_title
+from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
 from .report import Section
 from .submissions import Submission
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TableSettings, TrackTable
@@ -61,10 +61,11 @@ def track_html(table: TrackTable) -> str:
         cells = "".join(_est_cell(col, e.metrics[col]) for col, _ in TRACK_METRICS)
         rows.append(f"<tr{cls}><td>{e.rank}</td>{_name_cell(e.submission)}"
                     f'<td class="name">{escape(e.submission.mode)}</td>{cells}'
-                    f"<td>{fmt_bytes(e.bytes_per_step)}</td><td>{e.episodes}</td></tr>")
+                    f"<td>{fmt_bytes(e.bytes_per_step)}</td><td>{e.episodes}</td>"
+                    f"<td>{escape(VERSUS[e.versus_label])}</td></tr>")
     return (f"<h3>{escape(track_title(table.split, table.task, table.agents))}</h3>\n"
             f'<table><thead><tr><th>#</th><th class="name">Method</th><th class="name">Mode</th>{head}'
-            "<th>Bytes/agent-step</th><th>Episodes</th></tr></thead>"
+            "<th>Bytes/agent-step</th><th>Episodes</th><th>vs next</th></tr></thead>"
             f"<tbody>{''.join(rows)}</tbody></table>")
 
 
@@ -134,9 +135,7 @@ def _section_html(section: Section) -> str:
 
 def render_html(sections: list[Section], settings: TableSettings) -> str:
     """The whole page."""
-    note = (f"Each cell: team mean over episodes and its {settings.level:.0%} bootstrap confidence interval "
-            f"({settings.n_resamples} resamples, seed {settings.seed}). Tracks are ranked by team SPL. "
-            "Success, SPL and soft SPL in percent; distance to goal in metres; episode length in steps. Coordination "
+    note = (intervals_note(settings) + " Coordination "
             "modes are their own sections: central (one team policy sees every agent's observation, an upper "
             "reference), silent (one policy per agent, no messages), comm (one policy per agent, messages "
             "counted); bytes/agent-step is the mean message size per agent and step (– where not measured).")

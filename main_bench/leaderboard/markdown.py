@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..evaluation.task_rules import describe_rules
-from .format import fmt_bytes, fmt_estimate, metric_title, track_title
+from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
 
 
@@ -22,7 +22,7 @@ def _name(sub) -> str:
 def track_markdown(table: TrackTable) -> str:
     """One track table: rank, method, each metric as `mean [lo, hi]`, episode count."""
     head = ["#", "Method", "Mode"] + [metric_title(c, t) for c, t in TRACK_METRICS] + ["Bytes/agent-step",
-                                                                                     "Episodes"]
+                                                                                     "Episodes", "vs next"]
     lines = [f"### {track_title(table.split, table.task, table.agents)}", "",
              "| " + " | ".join(head) + " |", "|" + "|".join(["---:", ":---", ":---"] + ["---:"] * (len(head) - 3)) + "|"]
     for e in table.entries:
@@ -32,6 +32,7 @@ def track_markdown(table: TrackTable) -> str:
             cells.append(f"{mean} {ci}")
         cells.append(fmt_bytes(e.bytes_per_step))
         cells.append(str(e.episodes))
+        cells.append(VERSUS[e.versus_label])
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -73,9 +74,7 @@ def _submissions_markdown(section) -> str:
 def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]) -> str:
     """README.md: the same tables as the HTML page, with links to the plot files written beside it."""
     out = ["# MAIN benchmark leaderboard", "",
-           f"Each cell: team mean over episodes and its {settings.level:.0%} bootstrap confidence interval "
-           f"`[low, high]` ({settings.n_resamples} resamples, seed {settings.seed}). Tracks are ranked by team SPL. "
-           "Success, SPL and soft SPL in percent; distance to goal in metres; episode length in steps. Coordination "
+           intervals_note(settings) + " Coordination "
            "modes are their own sections: `central` (one team policy sees every agent's observation, an upper "
            "reference), `silent` (one policy per agent, no messages), `comm` (one policy per agent, messages "
            "counted); bytes/agent-step is the mean message size per agent and step (– where not measured).", ""]

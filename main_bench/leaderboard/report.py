@@ -20,7 +20,7 @@ MODE_TITLES = {
 }
 
 #: Version of leaderboard.json; bumped when a key changes meaning or goes away.
-LEADERBOARD_SCHEMA_VERSION = 1
+LEADERBOARD_SCHEMA_VERSION = 2  # 2: Wilson intervals, spl_vs_next, episode-resampling intervals
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,10 @@
 """Leaderboard tables: per-track rankings with bootstrap intervals, and the MAIN paper's Table 2 shape.
 
 A track is one (split, task, number of agents). Every number is a mean over the episodes' team records with
-its 95% bootstrap confidence interval (`main_bench.evaluation.metrics.bootstrap_ci`, seeded).
+its 95% bootstrap confidence interval resampling episodes, seeded by the rule `summary.json` uses
+(`main_bench.evaluation.intervals`), so both print the same digits; success rates also carry their Wilson
+score interval. Adjacent methods of a track are compared by a paired bootstrap of team SPL over the episodes
+both were scored on (`TrackEntry.versus_next`).
 """
 
 from __future__ import annotations
@@ -13,6 +16,13 @@ from types import MappingProxyType
 import numpy as np
 import pandas as pd
 
+from ..evaluation.intervals import (
+    PairedDifference,
+    cluster_bootstrap_ci,
+    interval_seed,
+    paired_difference,
+    wilson_interval,
+)
 from .submissions import LoadedSubmission, Submission
 
 #: Team metrics shown per track: (record column, column title).
@@ -44,11 +54,12 @@ class TableSettings:
 
 @dataclass(frozen=True)
 class Estimate:
-    """A mean over episodes and its bootstrap confidence interval."""
+    """A mean over episodes, its bootstrap confidence interval, and for success rates the Wilson interval."""
 
     mean: float
     lo: float
     hi: float
+    wilson: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -60,6 +71,18 @@ class TrackEntry:
     episodes: int
     metrics: Mapping[str, Estimate]
     bytes_per_step: float | None = None  # mean message bytes per agent-step; None in central mode (not measured)
+    #: Team SPL against the next entry of the table (None for the last): paired bootstrap over shared episodes.
+    versus_next: PairedDifference | None = None
+
+    @property
+    def versus_label(self) -> str:
+        """"tie", "significant" or "not significant" (against the next entry), "" for the last entry."""
+        v = self.versus_next
+        if v is None:
+            return ""
+        if v.tie:
+            return "tie"
+        return "significant" if v.significant else "not significant"
 
 
 @dataclass(frozen=True)
@@ -91,13 +114,20 @@ class Table2:
     cells: Mapping[str, Mapping[int, Mapping[str, Estimate]]]
 
 
-def estimate(values: np.ndarray, settings: TableSettings) -> Estimate:
-    """Mean and bootstrap interval of `values` (the shared `bootstrap_ci`, seeded by `settings.seed`)."""
-    from ..evaluation.metrics import bootstrap_ci
-
-    mean, lo, hi = bootstrap_ci(np.asarray(values, dtype=np.float64), seed=settings.seed,
-                                n_resamples=settings.n_resamples, level=settings.level)
-    return Estimate(float(mean), float(lo), float(hi))
+def estimate(values: np.ndarray, settings: TableSettings, key: str = "", name: str = "",
+             episodes: np.ndarray | None = None) -> Estimate:
+    """Mean and bootstrap interval of `values` (rows of `episodes`, resampled by episode), seeded by
+    `interval_seed(settings.seed, key, name)`; `name` "team:success" adds the Wilson interval."""
+    values = np.asarray(values, dtype=np.float64)
+    ok = np.isfinite(values)
+    clusters = None if episodes is None else np.asarray(episodes).astype(str)[ok]
+    mean, lo, hi = cluster_bootstrap_ci(values[ok], clusters, interval_seed(settings.seed, key, name),
+                                        n_resamples=settings.n_resamples, level=settings.level)
+    wilson = None
+    if name.endswith(":success"):
+        trials = len(np.unique(clusters)) if clusters is not None else int(ok.sum())
+        wilson = wilson_interval(mean, trials, settings.level)
+    return Estimate(float(mean), float(lo), float(hi), wilson)
 
 
 def track_keys(subs: list[LoadedSubmission]) -> list[tuple[str, str, int]]:
@@ -109,9 +139,10 @@ def track_keys(subs: list[LoadedSubmission]) -> list[tuple[str, str, int]]:
     return sorted(keys, key=lambda k: (k[0], k[1], k[2]))
 
 
-def _metrics_of(team: pd.DataFrame, columns: tuple[tuple[str, str], ...], settings: TableSettings
+def _metrics_of(team: pd.DataFrame, columns: tuple[tuple[str, str], ...], settings: TableSettings, key: str
                 ) -> dict[str, Estimate]:
-    return {col: estimate(team[col].to_numpy(), settings) for col, _ in columns}
+    ids = team["episode_id"].to_numpy()
+    return {col: estimate(team[col].to_numpy(), settings, key, "team:" + col, ids) for col, _ in columns}
 
 
 def track_table(subs: list[LoadedSubmission], split: str, task: str, agents: int,
@@ -119,6 +150,7 @@ def track_table(subs: list[LoadedSubmission], split: str, task: str, agents: int
     """Rank the submissions scored on one track by team SPL (then success, then name); ties share a rank."""
     from ..evaluation.channel import communication_stats
 
+    key = f"{split}/{task}/{agents}"
     rows = []
     talk: dict[str, float | None] = {}
     for s in subs:
@@ -126,21 +158,26 @@ def track_table(subs: list[LoadedSubmission], split: str, task: str, agents: int
         team = t[(t["split"] == split) & (t["task"] == task) & (t["agents"] == agents)]
         if team.empty:
             continue
-        rows.append((s.submission, len(team), _metrics_of(team, TRACK_METRICS, settings)))
+        spl = dict(zip(team["episode_id"].astype(str), team["spl"].astype(float), strict=True))
+        rows.append((s.submission, len(team), _metrics_of(team, TRACK_METRICS, settings, key), spl))
         r = s.records
         mine = r[(r["split"] == split) & (r["task"] == task) & (r["agents"] == agents)]
         talk[s.submission.name] = (None if s.submission.mode == "central"
                                    else float(communication_stats(mine)["bytes_per_agent_step"]))
     rows.sort(key=lambda r: (-r[2]["spl"].mean, -r[2]["success"].mean, r[0].name))
     entries: list[TrackEntry] = []
-    for i, (sub, n, metrics) in enumerate(rows):
+    for i, (sub, n, metrics, spl) in enumerate(rows):
         rank = i + 1
         if entries:
             prev = entries[-1]
             if (prev.metrics["spl"].mean, prev.metrics["success"].mean) == (metrics["spl"].mean,
                                                                             metrics["success"].mean):
                 rank = prev.rank
-        entries.append(TrackEntry(sub, rank, n, MappingProxyType(metrics), talk[sub.name]))
+        versus = None
+        if i + 1 < len(rows):
+            versus = paired_difference(spl, rows[i + 1][3], interval_seed(settings.seed, key, "paired:spl"),
+                                       settings.n_resamples, settings.level)
+        entries.append(TrackEntry(sub, rank, n, MappingProxyType(metrics), talk[sub.name], versus))
     return TrackTable(split, task, agents, tuple(entries))
 
 

@@ -101,12 +101,12 @@ def travel_vs_agents(frame: pd.DataFrame, seed: int) -> StatsFigure:
 
     Shared-target: min over agents; individual-target: sum over agents. 95% bootstrap intervals.
     """
-    from ..evaluation.metrics import bootstrap_ci
+    from ..evaluation.intervals import cluster_bootstrap_ci
 
     ep = episode_travel(frame)
     rows = []
     for (task, n), g in ep.groupby(["task", "agents"], sort=True):
-        mean, lo, hi = bootstrap_ci(g["travel"].to_numpy(), seed=seed)
+        mean, lo, hi = cluster_bootstrap_ci(g["travel"].to_numpy(), None, seed)
         rows.append({"task": task, "agents": int(n), "episodes": len(g), "mean_travel_m": mean,
                      "ci_low_m": lo, "ci_high_m": hi,
                      "definition": "min over agents" if task == "shared" else "sum over agents"})
