@@ -62,7 +62,10 @@ def _render(payload: dict) -> str:
             s = team[m]
             if s["mean"] is None:
                 return f"{m} n/a"
-            return f"{m} {s['mean']:.3f} [{s['ci_low']:.3f}, {s['ci_high']:.3f}]"
+            text = f"{m} {s['mean']:.3f} [{s['ci_low']:.3f}, {s['ci_high']:.3f}]"
+            if s.get("wilson_low") is not None:
+                text += f" W[{s['wilson_low']:.3f}, {s['wilson_high']:.3f}]"
+            return text
 
         talk = track.get("communication") or {}
         lines.append(f"{key}: {track['episodes']} episodes, {track['failed_episodes']} failed; "

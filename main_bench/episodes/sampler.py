@@ -123,9 +123,12 @@ def _draw(bank: TargetBank, target: Target, pool: _Pool, n: int, settings: Gener
     idx = np.flatnonzero(ok)
     pool.accepted += len(idx)
     if len(idx):
-        goal = (target.goal_points[np.asarray(j)[idx]] if target.position is None
-                else np.broadcast_to(target.position, (len(idx), 3)).copy())
-        pool.add((pts[idx], geo[idx], euc[idx], goal, floors[idx]))
+        if target.position is None:  # object: its region's nearest point
+            goal, straight = target.goal_points[np.asarray(j)[idx]], euc[idx]
+        else:  # point goal: the point itself, as the agent is told it
+            goal = np.broadcast_to(target.position, (len(idx), 3)).copy()
+            straight = np.linalg.norm(pts[idx] - goal, axis=1)
+        pool.add((pts[idx], geo[idx], straight, goal, floors[idx]))
     if pool.accepted == 0 and pool.drawn >= DEAD_AFTER:
         pool.dead = True
 

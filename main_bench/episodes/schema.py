@@ -33,7 +33,8 @@ ROW_SCHEMA = pa.schema(
         pa.field("start_positions", pa.list_(_vec3), nullable=False),
         pa.field("start_yaws", pa.list_(pa.float32()), nullable=False),
         # Per agent: the target's category ("" for a point goal), instance id (-1 for a point goal) and a
-        # representative navigable goal point (the nearest goal point to the start, or the point goal).
+        # representative point: the success region's nearest cell centre to the start, or the point goal itself.
+        # Euclidean distances are from the start to that point; geodesic distances (l_i) to the region.
         pa.field("target_categories", pa.list_(pa.string()), nullable=False),
         pa.field("target_instance_ids", pa.list_(pa.int32()), nullable=False),
         pa.field("target_positions", pa.list_(_vec3), nullable=False),

@@ -20,8 +20,9 @@ from .build import ALGORITHM_VERSION, Grid, build_grid, column_starts, find_floo
 from .field import SNAP_RADIUS, DistanceField
 from .settings import NavMeshSettings
 
-#: Version of the navmesh file layout.
-SCHEMA_VERSION = 1
+#: Version of the navmesh file layout (2: links stored relative to their node, 0 for none: 25x smaller files;
+#: version 1 files, absolute links, are still read).
+SCHEMA_VERSION = 2
 #: A point matches a surface at most this far above the point (m) ...
 _ABOVE_EXTRA = 0.05
 
@@ -82,6 +83,19 @@ def _npz_bytes(**arrays: np.ndarray) -> bytes:
             info.compress_type = zipfile.ZIP_DEFLATED
             zf.writestr(info, one.getvalue())
     return buf.getvalue()
+
+
+def _relative_links(nbr: np.ndarray) -> np.ndarray:
+    """(N, 8) links as offsets from their own node (0: no link; a node never links to itself), int32."""
+    own = np.arange(len(nbr), dtype=np.int64)[:, None]
+    return np.where(nbr >= 0, nbr - own, 0).astype(np.int32)
+
+
+def _absolute_links(rel: np.ndarray) -> np.ndarray:
+    """Inverse of `_relative_links`: (N, 8) int64 node indices, -1 for no link."""
+    rel = np.asarray(rel, dtype=np.int64)
+    own = np.arange(len(rel), dtype=np.int64)[:, None]
+    return np.where(rel != 0, rel + own, -1)
 
 
 class NavMesh:
@@ -183,7 +197,7 @@ class NavMesh:
         }
         data = _npz_bytes(meta=np.frombuffer(json.dumps(meta, sort_keys=True).encode(), np.uint8),
                           ix=g.ix.astype(np.int32), iy=g.iy.astype(np.int32), z=g.z, zs=g.zs,
-                          nbr=g.nbr.astype(np.int32), island=g.island.astype(np.int32),
+                          nbr_rel=_relative_links(g.nbr), island=g.island.astype(np.int32),
                           ox=self._ax - self._px, oy=self._ay - self._py)
         with atomic_path(path) as tmp:
             tmp.write_bytes(data)
@@ -214,7 +228,8 @@ class NavMesh:
             nx, ny = int(gm["nx"]), int(gm["ny"])
             grid = Grid(x0=float(gm["x0"]), y0=float(gm["y0"]), cell_size=float(gm["cell_size"]), nx=nx, ny=ny,
                         ix=ix, iy=iy, z=arrays["z"].astype(np.float64), zs=arrays["zs"].astype(np.float64),
-                        nbr=arrays["nbr"].astype(np.int64), island=arrays["island"].astype(np.int64),
+                        nbr=_absolute_links(arrays["nbr_rel"]) if "nbr_rel" in arrays
+                        else arrays["nbr"].astype(np.int64), island=arrays["island"].astype(np.int64),
                         col_start=column_starts(ix, iy, nx, ny), ox=arrays.get("ox"), oy=arrays.get("oy"))
             settings = NavMeshSettings.from_json(meta["settings"])
             nm = cls(grid, settings, str(meta["scene_id"]), str(meta["scene_hash"]), str(meta["geometry_hash"]),

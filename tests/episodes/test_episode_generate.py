@@ -21,7 +21,7 @@ from main_bench.io import sha256_file
 
 ALL_OPTIONS = ("--task", "both", "--agents", "1,2,3", "--min-distance", "1.5", "--max-distance", "8",
                "--success-distance", "0.5", "--seed", "7", "--workers", "1", "--executor", "local",
-               "--shard-size", "10", "--start-margin", "0.2", "--ratio-threshold", "0", "--goal-radius", "0.6",
+               "--shard-size", "10", "--start-margin", "0.2", "--ratio-threshold", "0", "--min-island-area", "3",
                "--max-rounds", "6", "--agent-radius", "0.2")
 
 
@@ -42,7 +42,7 @@ def test_generate_with_every_option(gen, tmp_path, ep_scenes):
     assert (s.tasks, s.agents, s.per_scene, s.seed, s.shard_size, s.max_rounds) == (
         ("shared", "individual"), (1, 2, 3), 24, 7, 10, 6)
     assert (s.min_distance, s.max_distance, s.success_distance, s.start_margin, s.ratio_threshold,
-            s.goal_radius) == (1.5, 8.0, 0.5, 0.2, 0.0, 0.6)
+            s.min_island_area) == (1.5, 8.0, 0.5, 0.2, 0.0, 3.0)
     assert m.navmesh_settings["agent_radius"] == 0.2 and m.seed == 7
     assert isinstance(json.loads((out / "manifest.json").read_text())["navmesh_algorithm"], int)
     assert {k: (e.split, e.source) for k, e in m.scenes.items()} == {"box": ("val", "path"), "furn": ("test", "path")}
