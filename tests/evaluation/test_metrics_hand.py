@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from main_bench.evaluation.intervals import cluster_bootstrap_ci
 from main_bench.evaluation.metrics import (
     EpisodeTrace,
-    bootstrap_ci,
     efficiency,
     episode_metrics,
     progress,
@@ -158,14 +158,14 @@ def test_metrics_recomputed_from_saved_trajectory_rows():
 
 def test_bootstrap_ci():
     values = np.array([0.0, 1.0] * 50)
-    mean, lo, hi = bootstrap_ci(values, seed=7)
+    mean, lo, hi = cluster_bootstrap_ci(values, None, 7)
     assert mean == 0.5 and 0.38 < lo < 0.45 and 0.55 < hi < 0.62
-    assert bootstrap_ci(values, seed=7) == (mean, lo, hi)
+    assert cluster_bootstrap_ci(values, None, 7) == (mean, lo, hi)
     noisy = np.random.default_rng(0).random(100)
-    assert bootstrap_ci(noisy, seed=8) != bootstrap_ci(noisy, seed=9)
-    assert bootstrap_ci(np.array([0.3]), seed=1) == (0.3, 0.3, 0.3)
-    assert bootstrap_ci(np.full(10, 2.0), seed=1) == (2.0, 2.0, 2.0)
-    big = bootstrap_ci(np.tile([0.0, 1.0], 5000), seed=7)
+    assert cluster_bootstrap_ci(noisy, None, 8) != cluster_bootstrap_ci(noisy, None, 9)
+    assert cluster_bootstrap_ci(np.array([0.3]), None, 1) == (0.3, 0.3, 0.3)
+    assert cluster_bootstrap_ci(np.full(10, 2.0), None, 1) == (2.0, 2.0, 2.0)
+    big = cluster_bootstrap_ci(np.tile([0.0, 1.0], 5000), None, 7)
     assert big[2] - big[1] < hi - lo
     with pytest.raises(ValueError):
-        bootstrap_ci(np.array([]), seed=1)
+        cluster_bootstrap_ci(np.array([]), None, 1)
