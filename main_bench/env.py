@@ -128,6 +128,8 @@ class MainParallelEnv(ParallelEnv):
                                                                 height=int(image_size)))
         self.sim_settings = sim_settings
         self.max_steps = int(max_steps or max_steps_of(self.manifest))
+        #: Radius of the data set's success regions (m); a `found` call is correct within one navmesh cell of
+        #: the region (`evaluation.task_rules.found_tolerance`).
         self.success_distance = float(self.manifest.success_distance)
         self.possible_agents = list(agent_ids(n))
         self.agents: list[str] = []

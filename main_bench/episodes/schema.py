@@ -39,8 +39,8 @@ ROW_SCHEMA = pa.schema(
         pa.field("target_instance_ids", pa.list_(pa.int32()), nullable=False),
         pa.field("target_positions", pa.list_(_vec3), nullable=False),
         pa.field("geodesic_distances", pa.list_(pa.float32()), nullable=False),
-        # Per agent: its target's success region, run-length encoded cell indices of the data set's stored
-        # navmesh ([start, length, ...], `goals.encode_cells`).
+        # Per agent: its target's success region, run-length coded cell indices of the data set's stored
+        # navmesh ([gap, length, ...], `goals.encode_cells`).
         pa.field("target_regions", pa.list_(pa.list_(pa.int32())), nullable=False),
         pa.field("euclidean_distances", pa.list_(pa.float32()), nullable=False),
         pa.field("start_floors", pa.list_(pa.int16()), nullable=False),

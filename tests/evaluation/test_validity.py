@@ -202,3 +202,16 @@ def two_scene_dataset(tmp_path_factory):
                                   point_goal_episodes=16, seed=0)
     generate_dataset(settings, sources, root / "dataset", NavMeshSettings(), cache_dir=root / "cache" / "navmesh")
     return Path(root / "dataset"), root / "cache"
+
+
+def test_evaluate_refuses_a_data_set_of_the_old_schema_with_how_to_regenerate(cli, tiny_dataset, tmp_path):
+    dataset, _ = tiny_dataset
+    old = tmp_path / "old"
+    shutil.copytree(dataset, old)
+    doc = json.loads((old / "manifest.json").read_text())
+    doc["schema_version"] = 1
+    (old / "manifest.json").write_text(json.dumps(doc))
+    r = cli("evaluate", "--episodes", old, "--split", "val", "--agent", "baseline:random", "--out", tmp_path / "o")
+    assert r.code == 2 and len(r.err.strip().splitlines()) == 1, r.err
+    assert "schema_version 1" in r.err and "regenerate" in r.err and "episodes generate" in r.err
+    assert not (tmp_path / "o").exists()

@@ -54,7 +54,7 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
     payload = json.loads(res.out)
     assert payload["command"] == "leaderboard build" and payload["schema_version"] == 1
     doc = json.loads((tmp_path / "lb" / "leaderboard.json").read_text())
-    assert doc["schema_version"] == 1 and len(doc["sections"]) == 1
+    assert doc["schema_version"] == 2 and len(doc["sections"]) == 1
     section = doc["sections"][0]
     assert len(section["tracks"]) == 4
     readme = (tmp_path / "lb" / "README.md").read_text()
@@ -79,6 +79,14 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
             sub = next(s for s in section["submissions"] if s["submission_metadata"]["method_name"] == r["method_name"])
             spls.append(next(e[track["track"]]["spl"] for e in sub["result"] if track["track"] in e))
         assert spls == sorted(spls, reverse=True)
+        # Adjacent methods are compared by a paired bootstrap over the same episodes; the last has no comparison.
+        labels = []
+        for r in track["ranking"]:
+            sub = next(s for s in section["submissions"] if s["submission_metadata"]["method_name"] == r["method_name"])
+            labels.append(next(e[track["track"]] for e in sub["result"] if track["track"] in e).get("spl_vs_next"))
+        assert labels[-1] is None and all(v["label"] in ("tie", "significant", "not significant") for v in labels[:-1])
+        assert all(v["episodes"] > 0 and v["ci_low"] <= v["difference"] <= v["ci_high"] for v in labels[:-1])
+    assert "vs next" in readme and " W[" in readme and "vs next" in page
     assert [s["submission_metadata"]["baseline"] for s in section["submissions"]] == [False, True, True]
     assert readme.count("*(baseline)*") >= 2 and 'class="badge">baseline' in page
     assert "Table 2 shape: val · shared-target" in readme and "2 agents: Length" in readme

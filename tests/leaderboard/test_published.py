@@ -28,3 +28,31 @@ def test_report_shows_data_set_paths_relative_within_one_tree(tmp_path):
     assert _shown_path("/elsewhere/sample", tmp_path) == "/elsewhere/sample"
     assert _shown_path("relative/path", tmp_path) == "relative/path"
     assert _shown_path("", tmp_path) == ""
+
+
+def test_published_board_scores_the_whole_val_split_of_the_sample():
+    """Every val scene of the sample, every episode of each val track (not a --limit), for every baseline; the
+    summary's intervals and the board's are the same numbers (one seed rule)."""
+    from main_bench.episodes.dataset import load_table
+
+    table = load_table(REPO / "episodes" / "sample", split="val")
+    scenes = set(table.column("scene_id").to_pylist())
+    assert len(scenes) >= 2
+    per_track: dict[str, set[str]] = {}
+    for eid, task, n in zip(table.column("episode_id").to_pylist(), table.column("task").to_pylist(),
+                            table.column("agents").to_pylist(), strict=True):
+        per_track.setdefault(f"val/{task}/{n}", set()).add(eid)
+    board = json.loads((BOARD / "leaderboard.json").read_text())
+    results = {s["submission_metadata"]["method_name"]: s["result"] for s in board["sections"][0]["submissions"]}
+    for name in ("oracle", "random", "comm"):
+        summary = json.loads((BOARD / "results" / name / "summary.json").read_text())
+        assert summary["settings"]["limit"] is None
+        assert set(summary["tracks"]) == set(per_track)
+        for key, track in summary["tracks"].items():
+            assert set(track["episode_ids"]) == per_track[key]
+            assert {i.rsplit("/", 3)[0] for i in track["episode_ids"]} == scenes
+            shown = next(r[key] for r in results[name] if key in r)
+            for metric in ("success", "spl"):
+                assert shown[f"{metric}_ci_low"] == track["team"][metric]["ci_low"]
+                assert shown[f"{metric}_ci_high"] == track["team"][metric]["ci_high"]
+            assert shown["success_wilson_low"] == track["team"]["success"]["wilson_low"]
