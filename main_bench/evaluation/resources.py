@@ -85,7 +85,8 @@ class EpisodeResources:
 
     def fields(self, episode: Episode, planning: bool = False) -> list[Any]:
         """Each agent's distance field to its target's stored success region (on the planning navmesh when
-        `planning`: to the same region's points; None where none of them is on it)."""
+        `planning`: to the region's points that lie on it, so a planned path ends inside the region; None where
+        none does)."""
         from ..episodes.goals import decode_cells, region_field
 
         _, navmesh = self.scene(episode.scene_id)
@@ -101,11 +102,11 @@ class EpisodeResources:
                     raise DatasetError(f"episode {episode.episode_id!r} stores no success region for agent {i}; "
                                        "regenerate the data set", path=self.manifest.root)
                 cells = decode_cells(episode.target_regions[i])
-                if planning:
+                if planning:  # the region's points that lie on the planning navmesh, never snapped onto it
                     points = np.asarray(navmesh.cells(), dtype=np.float64)[cells]
-                    field = self._plan_navmesh(episode.scene_id).distance_field(points)
-                    if not np.any(field.reachable_targets):
-                        field = None
+                    plan = self._plan_navmesh(episode.scene_id)
+                    points = points[np.asarray(plan.is_navigable(points), dtype=bool)]
+                    field = plan.distance_field(points) if len(points) else None
                 else:
                     field = region_field(navmesh, cells)
                 self._fields[key] = field
