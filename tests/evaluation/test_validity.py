@@ -37,10 +37,14 @@ def _walk(field, start: np.ndarray, detour: float) -> np.ndarray:
     """Positions of an agent that walks `detour / 2` metres along its shortest path, back to the start, then the
     whole shortest path to its success region (a detour of `detour` metres on navigable ground)."""
     path = _densify(np.asarray(field.path(start), dtype=np.float64).reshape(-1, 3))
+    if detour <= 0:
+        return path
     seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
     along = np.concatenate(([0.0], np.cumsum(seg)))
-    out_leg = path[along <= detour / 2 + 1e-9]
-    return np.concatenate([out_leg, out_leg[::-1][1:], path[1:]]) if detour > 0 else path
+    k = int(np.searchsorted(along, detour / 2, side="right"))  # the turning point lies on segment k-1 -> k
+    turn = path[k - 1] + (path[k] - path[k - 1]) * ((detour / 2 - along[k - 1]) / seg[k - 1])
+    out_leg = np.concatenate([path[:k], turn[None]])
+    return np.concatenate([out_leg, out_leg[::-1][1:], path[1:]])
 
 
 @pytest.mark.parametrize("detour", [0.0, 1.0, 3.0])
