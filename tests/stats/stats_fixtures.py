@@ -19,7 +19,8 @@ SCENES = {"loft": (8.0, 6.0), "office_2": (14.0, 5.0), "tiny house": (5.0, 4.0)}
 
 
 def make_dataset(root: Path, per_shard: int = 12, seed: int = 5, scene_paths: dict[str, str] | None = None) -> Path:
-    """Episodes for 3 scenes x {shared, individual} x {2, 3} agents; scene files point nowhere (no navmesh)."""
+    """Episodes for 3 scenes x {shared, individual} x {2, 3} agents; scene files point nowhere (no navmesh) unless
+    `scene_paths` names a real file for a scene (its navmesh is then stored with the data set)."""
     rng = np.random.default_rng(seed)
     shards = []
     for scene, (w, h) in SCENES.items():
@@ -41,7 +42,8 @@ def make_dataset(root: Path, per_shard: int = 12, seed: int = 5, scene_paths: di
                         "num_agents": n, "start_positions": starts.tolist(), "start_yaws": [0.0] * n,
                         "target_categories": [""] * n, "target_instance_ids": [-1] * n,
                         "target_positions": targets.tolist(), "geodesic_distances": geo.tolist(),
-                        "euclidean_distances": euc.tolist(), "start_floors": [0] * n, "target_floors": [0] * n})
+                        "euclidean_distances": euc.tolist(), "start_floors": [0] * n, "target_floors": [0] * n,
+                        "target_regions": [[] for _ in range(n)]})
                 rel = f"split=val/task={task}/agents={n}/part-{scene.replace(' ', '_')}-00000.parquet"
                 (root / rel).parent.mkdir(parents=True, exist_ok=True)
                 pq.write_table(pa.Table.from_pylist(rows, schema=ROW_SCHEMA), root / rel)
@@ -52,6 +54,15 @@ def make_dataset(root: Path, per_shard: int = 12, seed: int = 5, scene_paths: di
     scenes = {s: {"split": "val", "hash": scene_content_hash(paths[s]) if s in paths else "h" * 64,
                   "source": "path", "path": paths.get(s, str(root / "no-such-scene.glb")), "up": "auto"}
               for s in SCENES}
+    for sid, path in paths.items():  # a real scene: its navmesh is stored with the data set, as generate does
+        from main_bench.navmesh import NavMesh
+        from main_bench.scenes import load_scene
+
+        rel = f"navmesh/{sid}.navmesh"
+        NavMesh.build(load_scene(path), NavMeshSettings()).save(root / rel)
+        for shard in shards:
+            if shard["scene_id"] == sid:
+                shard["navmesh"] = {"path": rel, "sha256": sha256_file(root / rel)}
     ident = identity(GenerationSettings(seed=seed), NavMeshSettings().to_json(), scenes)
     atomic_write_json(root / "manifest.json", build_manifest(ident, shards))
     return root
