@@ -91,7 +91,7 @@ def export_habitat(dataset: str | Path, out: str | Path) -> list[Path]:
                         "target_category": row["target_categories"][a],
                         "target_instance_id": int(row["target_instance_ids"][a]),
                         "start_floor": int(row["start_floors"][a]), "target_floor": int(row["target_floors"][a]),
-                        "target_region": [int(v) for v in row["target_regions"][a]],
+                        "target_region": [int(v) for v in (row["target_regions"] or [[]] * n)[a]],
                     },
                 },
                 "goals": [{"position": _floats(to_habitat(row["target_positions"][a])),

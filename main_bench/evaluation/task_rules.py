@@ -78,4 +78,6 @@ def describe_rules(rules: Mapping[str, Any]) -> str:
             f"found, move_forward {num('forward_step')} m, turn_left/turn_right {num('turn_angle_deg')} deg; "
             f"camera {num('width', cam)}x{num('height', cam)} px, hfov {num('hfov_deg', cam)} deg at "
             f"{num('height_m', cam)} m, depth to {num('max_depth', cam)} m; agent radius {num('agent_radius')} m, "
-            f"height {num('agent_height')} m, climb {num('max_climb')} m")
+            f"height {num('agent_height')} m, climb {num('max_climb')} m"
+            + (f"; success region: navigable cells within {num('success_distance')} m of the target that see it, "
+               f"found correct within {num('found_tolerance')} m of the region" if "found_tolerance" in rules else ""))

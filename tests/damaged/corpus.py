@@ -65,14 +65,25 @@ def _episodes(task: str, n: int, rng: np.random.Generator) -> list[dict]:
 
 def make_dataset(root: Path, scene: Path) -> Path:
     """An episode data set with one shard per track and a real manifest (checksums, scene hash)."""
+    from main_bench.episodes.goals import encode_cells, point_region
+    from main_bench.navmesh import NavMesh
+    from main_bench.scenes import load_scene
+
     rng = np.random.default_rng(0)
+    navmesh = NavMesh.build(load_scene(scene, up="z"), NavMeshSettings())  # stored with the data set, as generate does
+    navmesh.save(root / "navmesh" / "room.navmesh")
+    nav_entry = {"path": "navmesh/room.navmesh", "sha256": sha256_file(root / "navmesh" / "room.navmesh")}
     shards = []
     for split, task, n in TRACKS:
         rel = f"split={split}/task={task}/agents={n}/part-00000.parquet"
         rows = _episodes(task, n, rng)
+        for row in rows:  # each point goal's success region on the stored navmesh
+            row["target_regions"] = [encode_cells(point_region(navmesh, np.asarray(t), GenerationSettings())).tolist()
+                                     for t in row["target_positions"]]
         write_shard(pa.Table.from_pylist(rows, schema=ROW_SCHEMA), root / rel, {})
         shards.append({"path": rel, "split": split, "scene_id": "room", "task": task, "agents": n, "shard": 0,
-                       "requested": len(rows), "rows": len(rows), "sha256": sha256_file(root / rel)})
+                       "requested": len(rows), "rows": len(rows), "sha256": sha256_file(root / rel),
+                       "navmesh": nav_entry})
     scenes = {"room": {"split": "val", "hash": scene_content_hash(scene), "source": "path", "path": str(scene),
                        "up": "z"}}
     ident = identity(GenerationSettings(agents=(2,)), NavMeshSettings().to_json(), scenes)
