@@ -104,11 +104,13 @@ def make_results(root: Path, dataset: Path) -> Path:
             for i in [*range(n), TEAM]:
                 recs.append(dict(episode_id=ep["episode_id"], scene_id="room", agent_index=i, success=0.0, spl=0.0,
                                  soft_spl=0.0, distance_to_goal=1.0, path_length=1.0, steps=4, collisions=0,
-                                 geodesic_distance=ep["geodesic_distances"][0], called_found=False, failure=""))
+                                 geodesic_distance=ep["geodesic_distances"][0], called_found=False, failure="",
+                                 messages=0, message_bytes=0))
             for i in range(n):
                 x, y, z = ep["start_positions"][i]
                 traj += [dict(episode_id=ep["episode_id"], step=t, agent_index=i, action=-1 if t == 0 else 1,
-                              x=x + 0.25 * t, y=y, z=z, yaw=0.0, collided=False, distance_to_goal=1.0)
+                              x=x + 0.25 * t, y=y, z=z, yaw=0.0, collided=False, distance_to_goal=1.0,
+                              message_bytes=0, message_to=-2)
                          for t in range(5)]
         written.append(write_part(root, "records", split, task, n, 0,
                                   pa.Table.from_pylist(recs, schema=RECORD_SCHEMA)))
