@@ -11,7 +11,6 @@ import sys
 
 import typer
 
-from .. import __version__
 from ..errors import MainBenchError
 
 app = typer.Typer(
@@ -20,11 +19,14 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
+    rich_markup_mode=None,
 )
 
 
 def _version(value: bool) -> None:
     if value:
+        from .. import __version__
+
         typer.echo(f"main-bench {__version__}")
         raise typer.Exit()
 
@@ -56,14 +58,11 @@ _register()
 
 def _cli_exceptions() -> tuple[tuple[type, ...], tuple[type, ...], tuple[type, ...], tuple[type, ...]]:
     """(exit, abort, usage, other click errors) classes of the click typer uses: its bundled copy (typer >= 0.29,
-    no `click` package needed) and the separate `click` package where one is installed."""
-    modules = []
-    for name in ("typer._click.exceptions", "click.exceptions"):
-        try:
-            modules.append(importlib.import_module(name))
-        except ImportError:
-            continue
-    assert modules, "typer without any click: unsupported typer version"
+    no `click` package needed), else the separate `click` package (older typer)."""
+    try:
+        modules = [importlib.import_module("typer._click.exceptions")]
+    except ImportError:
+        modules = [importlib.import_module("click.exceptions")]
     exits = (typer.Exit, *(m.Exit for m in modules if hasattr(m, "Exit")))
     aborts = (typer.Abort, *(m.Abort for m in modules if hasattr(m, "Abort")))
     usage = tuple(m.UsageError for m in modules)

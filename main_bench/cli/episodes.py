@@ -21,7 +21,7 @@ from .common import (
     progress,
 )
 
-app = typer.Typer(help="Generate, validate, export and import episode data sets.", no_args_is_help=True)
+app = typer.Typer(help="Generate, validate, export and import episode data sets.", rich_markup_mode=None, no_args_is_help=True)
 
 
 @app.callback()

@@ -14,7 +14,7 @@ import typer
 from ..errors import InputError
 from .common import JsonOption, emit, parse_int_list
 
-app = typer.Typer(help="Evaluate a submitted team policy on an episode split.", invoke_without_command=True)
+app = typer.Typer(help="Evaluate a submitted team policy on an episode split.", rich_markup_mode=None, invoke_without_command=True)
 
 
 class _Progress:

@@ -8,7 +8,7 @@ import typer
 
 from .common import JsonOption, emit
 
-app = typer.Typer(help="Build the leaderboard report from results directories.", no_args_is_help=True)
+app = typer.Typer(help="Build the leaderboard report from results directories.", rich_markup_mode=None, no_args_is_help=True)
 
 
 @app.callback()

@@ -23,7 +23,7 @@ from .common import (
     parse_vec3,
 )
 
-app = typer.Typer(help="Build navmeshes and query geodesic distances.", no_args_is_help=True)
+app = typer.Typer(help="Build navmeshes and query geodesic distances.", rich_markup_mode=None, no_args_is_help=True)
 
 FileArg = typer.Argument(..., help="Navmesh file written by `main-bench navmesh build`.")
 FromOption = typer.Option(..., "--from", help="Start point x,y,z (m, +Z up, feet height).")

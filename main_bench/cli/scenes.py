@@ -9,7 +9,7 @@ import typer
 
 from .common import JsonOption, ScaleOption, UpOption, emit
 
-app = typer.Typer(help="Inspect scenes; generate and preview built-in procedural houses.", no_args_is_help=True)
+app = typer.Typer(help="Inspect scenes; generate and preview built-in procedural houses.", rich_markup_mode=None, no_args_is_help=True)
 
 
 

@@ -23,7 +23,7 @@ def stats(
     seed: int = typer.Option(0, "--seed", min=0, help="Seed of the bootstrap intervals."),
     as_json: bool = JsonOption,
 ) -> None:
-    """Dataset statistics and figures (MAIN Fig. 3a/3b, distance histograms, ratio, start/target density)."""
+    """Dataset statistics and figures: MAIN Fig 3a/3b, distance histograms, ratio, start/target density."""
     from ..stats import StatsSettings, compute_stats
 
     report = compute_stats(dataset, out, StatsSettings(maps=maps, cache_dir=cache_dir, seed=seed))
