@@ -9,14 +9,19 @@ from mb_testing import REPO
 from main_bench.leaderboard.build import _shown_path
 
 BOARD = REPO / "leaderboard"
+#: The published results folders: every baseline in every coordination mode it runs in.
+PUBLISHED = {f"{b}-{mode}": (f"{b} ({mode})", mode) for mode in ("central", "silent", "comm") for b in ("oracle", "random")}
+PUBLISHED["comm-comm"] = ("comm (comm)", "comm")
 
 
 def test_committed_report_covers_its_results():
     board = json.loads((BOARD / "leaderboard.json").read_text())
     text = json.dumps(board)
-    for name in ("oracle", "random", "comm"):
-        summary = json.loads((BOARD / "results" / name / "summary.json").read_text())
+    assert sorted(p.name for p in (BOARD / "results").iterdir()) == sorted(PUBLISHED)
+    for folder, (name, mode) in PUBLISHED.items():
+        summary = json.loads((BOARD / "results" / folder / "summary.json").read_text())
         assert summary["submission"]["name"] == name and summary["submission"]["baseline"] is True
+        assert summary["settings"]["mode"] == mode
         assert summary["dataset"]["manifest_hash"] in text
     sample_hash = __import__("hashlib").sha256((REPO / "episodes" / "sample" / "manifest.json").read_bytes())
     assert sample_hash.hexdigest() in text, "leaderboard/ is not on the committed sample: rebuild it"
@@ -43,9 +48,10 @@ def test_published_board_scores_the_whole_val_split_of_the_sample():
                             table.column("agents").to_pylist(), strict=True):
         per_track.setdefault(f"val/{task}/{n}", set()).add(eid)
     board = json.loads((BOARD / "leaderboard.json").read_text())
-    results = {s["submission_metadata"]["method_name"]: s["result"] for s in board["sections"][0]["submissions"]}
-    for name in ("oracle", "random", "comm"):
-        summary = json.loads((BOARD / "results" / name / "summary.json").read_text())
+    results = {s["submission_metadata"]["method_name"]: s["result"]
+               for section in board["sections"] for s in section["submissions"]}
+    for folder, (name, _) in PUBLISHED.items():
+        summary = json.loads((BOARD / "results" / folder / "summary.json").read_text())
         assert summary["settings"]["limit"] is None
         assert set(summary["tracks"]) == set(per_track)
         for key, track in summary["tracks"].items():
