@@ -40,7 +40,7 @@ def _root(
 
 
 def _register() -> None:
-    from . import bench, demo, episodes, evaluate, leaderboard, navmesh, scenes, stats, visualize
+    from . import bench, demo, episodes, evaluate, leaderboard, navmesh, scenes, stats, train, visualize
 
     app.add_typer(scenes.app, name="scenes")
     app.add_typer(navmesh.app, name="navmesh")
@@ -51,6 +51,7 @@ def _register() -> None:
     visualize.register(app)
     demo.register(app)
     bench.register(app)
+    train.register(app)
 
 
 _register()

@@ -1,0 +1,114 @@
+"""`main-bench train`: train one of the MAIN paper's baselines (PPO) and leave a submission, and
+`main-bench train point-goals`: the point-goal copy of an object-goal data set (the small configuration's data).
+"""
+
+from __future__ import annotations
+
+import shlex
+import sys
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from .common import JsonOption, emit
+
+ALGO_HELP = "multi-ppo | ippo | mappo | comm-s | comm-v | comm-rm | comm-rv"
+
+
+def register(app: typer.Typer) -> None:
+    """Add `train` (a group: `train run`, `train point-goals`) to the root app."""
+    group = typer.Typer(help="Train the MAIN paper's baselines with PPO on a vectorised multi-agent sampler.",
+                        no_args_is_help=True)
+    group.command("run")(run)
+    group.command("point-goals")(point_goals)
+    app.add_typer(group, name="train")
+
+
+def run(
+    episodes: Path = typer.Option(..., "--episodes", help="Episode data set to train on."),
+    out: Path = typer.Option(..., "--out", help="Run folder: checkpoint, curves, submission (resumed if present)."),
+    algo: str = typer.Option("ippo", "--algo", help=ALGO_HELP),
+    split: str = typer.Option("train", "--split", help="Split to train on."),
+    agents: int = typer.Option(2, "--agents", help="Team size N."),
+    task: str = typer.Option("any", "--task", help="shared, individual or any (both)."),
+    goal: str = typer.Option("point", "--goal", help="point or object goals."),
+    track: str = typer.Option("gps", "--track", help="egocentric or gps."),
+    image_size: int = typer.Option(64, "--image-size", help="Square camera side (pixels)."),
+    rgb: bool = typer.Option(False, "--rgb/--depth-only", help="RGB-D instead of depth only."),
+    num_envs: int = typer.Option(4, "--num-envs", "-B", help="Sub-environments B."),
+    workers: int = typer.Option(2, "--workers", help="Sampler worker processes (or Ray actors)."),
+    backend: str = typer.Option("process", "--sampler", help="process, inline or ray."),
+    rollout: int = typer.Option(64, "--rollout", help="Steps per sub-environment per update."),
+    updates: int = typer.Option(100, "--updates", help="Total PPO updates (a resumed run counts the earlier ones)."),
+    max_minutes: float = typer.Option(0.0, "--max-minutes", help="Stop after this wall time (0: no limit)."),
+    checkpoint_every: int = typer.Option(10, "--checkpoint-every", help="Checkpoint every K updates."),
+    seed: int = typer.Option(0, "--seed", help="Seed."),
+    device: str = typer.Option("cpu", "--device", help="cpu or cuda."),
+    hidden: int = typer.Option(128, "--hidden", help="GRU width."),
+    lr: float = typer.Option(2.5e-4, "--lr", help="Adam learning rate."),
+    epochs: int = typer.Option(4, "--epochs", help="PPO epochs per update."),
+    bptt: int = typer.Option(32, "--bptt", help="Truncated BPTT length (steps)."),
+    max_steps: int = typer.Option(0, "--max-steps", help="Episode step limit (0: the data set's)."),
+    threads: int = typer.Option(1, "--threads", help="torch CPU threads of the trainer."),
+    found_penalty: float = typer.Option(0.0, "--found-penalty", help="Training-only shaping: subtracted from "
+                                        "an agent's reward for a wrong `found` call."),
+    cache_dir: Path = typer.Option(None, "--cache-dir", help="Cache of built-in houses and navmeshes."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Train (or resume) one baseline; prints a live progress line, writes checkpoint.pt, curve.csv/png and
+    submission/ into --out."""
+    import torch
+
+    from ..training.ppo import PPOSettings
+    from ..training.settings import TrainSettings
+    from ..training.trainer import train
+
+    torch.set_num_threads(max(1, threads))
+    settings = TrainSettings(
+        episodes=str(episodes), algo=algo, split=split, agents=agents, task=None if task == "any" else task,
+        goal=goal, track=track, image_size=image_size, use_rgb=rgb, num_envs=num_envs, workers=workers,
+        backend=backend, rollout=rollout, updates=updates, max_minutes=max_minutes,
+        checkpoint_every=checkpoint_every, seed=seed, device=device, hidden=hidden, features=hidden,
+        max_steps=max_steps or None, found_penalty=found_penalty,
+        cache_dir=None if cache_dir is None else str(cache_dir), ppo=PPOSettings(lr=lr, epochs=epochs, bptt=bptt))
+    command = "main-bench " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+
+    def show(line: str) -> None:
+        if sys.stderr.isatty():
+            sys.stderr.write("\r\033[K" + line)
+        else:
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+
+    summary = train(settings, out, command, show)
+    if sys.stderr.isatty():
+        sys.stderr.write("\n")
+    payload = {"updates": summary.updates, "agent_steps": summary.agent_steps, "episodes": summary.episodes,
+               "wall_seconds": round(summary.wall_seconds, 1), "resumed_from": summary.resumed_from,
+               "last": summary.last, "timing_seconds": summary.timing, "run_dir": summary.run_dir,
+               "submission": summary.submission, "mode": settings.mode, "command": command}
+    emit("train run", payload, as_json, _render)
+
+
+def _render(d: dict[str, Any]) -> str:
+    last = d["last"]
+    return (f"{d['updates']} updates, {d['agent_steps']:,} agent-steps, {d['episodes']} episodes in "
+            f"{d['wall_seconds']} s (resumed from update {d['resumed_from']})\n"
+            f"last: success {last.get('success', float('nan')):.3f}, team success "
+            f"{last.get('team_success', float('nan')):.3f}, SPL {last.get('spl', float('nan')):.3f}\n"
+            f"submission: {d['submission']} (evaluate with --mode {d['mode']})")
+
+
+def point_goals(
+    src: Path = typer.Argument(..., help="Object-goal data set (e.g. episodes/sample)."),
+    out: Path = typer.Option(..., "--out", help="Folder of the point-goal copy."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing data set at --out."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Write a point-goal copy of a data set: same starts, each agent's target its object's goal point nearest
+    its start (agent 0's for a shared target), distances recomputed."""
+    from ..training.pointgoals import point_goal_dataset
+
+    path = point_goal_dataset(src, out, overwrite=overwrite)
+    emit("train point-goals", {"out": str(path)}, as_json, lambda d: f"wrote {d['out']}")

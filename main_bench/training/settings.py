@@ -1,0 +1,71 @@
+"""What one training run is: the data, the team, the algorithm, the sampler, the budget (frozen settings)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from ..errors import InputError
+from .model import ALGOS, COMM_ALGOS
+from .ppo import PPOSettings
+
+#: Algorithms trained on the team's own reward per agent; the others share the team reward (sum over agents).
+OWN_REWARD = ("multi-ppo",)
+
+
+@dataclass(frozen=True)
+class TrainSettings:
+    """A training run. `rollout` steps per update for each of `num_envs` sub-environments of `agents` agents;
+    stops after `updates` updates or `max_minutes` of wall time, whichever first; checkpoints every
+    `checkpoint_every` updates. Images are `image_size` pixels square (depth, plus RGB with `use_rgb`)."""
+
+    episodes: str
+    algo: str = "ippo"
+    split: str = "train"
+    agents: int = 2
+    task: str | None = None
+    goal: str | None = "point"
+    track: str = "gps"
+    image_size: int = 64
+    use_rgb: bool = False
+    num_envs: int = 4
+    workers: int = 2
+    backend: str = "process"
+    rollout: int = 64
+    updates: int = 100
+    max_minutes: float = 0.0
+    checkpoint_every: int = 10
+    seed: int = 0
+    device: str = "cpu"
+    hidden: int = 128
+    features: int = 128
+    max_steps: int | None = None
+    renderer: str = "auto"
+    found_penalty: float = 0.0
+    cache_dir: str | None = None
+    ppo: PPOSettings = field(default_factory=PPOSettings)
+
+    def __post_init__(self) -> None:
+        if self.algo not in ALGOS:
+            raise InputError(f"--algo must be one of {', '.join(ALGOS)}, got {self.algo!r}")
+        if self.device not in ("cpu", "cuda") and not self.device.startswith("cuda:"):
+            raise InputError(f"--device must be cpu or cuda, got {self.device!r}")
+        for name in ("agents", "num_envs", "rollout", "updates", "checkpoint_every", "image_size"):
+            if int(getattr(self, name)) < 1:
+                raise InputError(f"--{name.replace('_', '-')} must be at least 1, got {getattr(self, name)}")
+        if self.workers < 0:
+            raise InputError(f"--workers must be 0 or more, got {self.workers}")
+
+    @property
+    def mode(self) -> str:
+        """The evaluation mode the trained policy runs in: `comm` for the comm variants, else `silent`."""
+        return "comm" if self.algo in COMM_ALGOS else "silent"
+
+    @property
+    def team_reward(self) -> bool:
+        """True when every agent is trained on the team's summed reward (all but Multi-PPO)."""
+        return self.algo not in OWN_REWARD
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict (metadata, checkpoints)."""
+        return asdict(self)

@@ -1,0 +1,82 @@
+"""Rollout storage: T steps of a (B, N) block of agents, with the GRU memories the policy started each step from.
+
+Flows in: the sampler's packed observations (depth kept as uint16 millimetres, RGB as uint8), the inbox, the
+actions, their log-probabilities, values, rewards, done/alive/first masks. Flows out: advantages and returns
+(`gae.py`) and sequences of length L for truncated backpropagation through time (`chunks`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+OBS_KEYS = ("depth", "rgb", "vec", "inbox", "inbox_len")
+
+
+@dataclass(frozen=True)
+class StorageShape:
+    """T steps, B sub-environments, N agents, image side S, RGB kept, GRU width H, message floats F (>= 1)."""
+
+    steps: int
+    envs: int
+    agents: int
+    image_size: int
+    use_rgb: bool
+    hidden: int
+    message_floats: int
+
+    def fields(self) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
+        """Every stored array's shape and dtype."""
+        from .obs import VEC
+
+        t, b, n, s, h, f = self.steps, self.envs, self.agents, self.image_size, self.hidden, self.message_floats
+        out = {
+            "depth": ((t, b, n, s, s), np.dtype(np.uint16)),
+            "vec": ((t, b, n, VEC), np.dtype(np.float32)),
+            "inbox": ((t, b, n, n, f), np.dtype(np.float32)),
+            "inbox_len": ((t, b, n, n), np.dtype(np.int32)),
+            "hidden": ((t, b, n, h), np.dtype(np.float32)),
+            "actions": ((t, b, n), np.dtype(np.int64)),
+            "logp": ((t, b, n), np.dtype(np.float32)),
+            "values": ((t + 1, b, n), np.dtype(np.float32)),
+            "rewards": ((t, b, n), np.dtype(np.float32)),
+            "done": ((t, b, n), np.dtype(np.bool_)),
+            "alive": ((t, b, n), np.dtype(np.bool_)),
+            "first": ((t, b, n), np.dtype(np.bool_)),
+        }
+        if self.use_rgb:
+            out["rgb"] = ((t, b, n, s, s, 3), np.dtype(np.uint8))
+        return out
+
+    def nbytes(self) -> int:
+        """Bytes of one rollout."""
+        return sum(int(np.prod(shape)) * dtype.itemsize for shape, dtype in self.fields().values())
+
+
+class Rollout:
+    """Numpy arrays of one rollout (`StorageShape.fields`); filled step by step with `put`."""
+
+    def __init__(self, shape: StorageShape) -> None:
+        self.shape = shape
+        self.data = {name: np.zeros(s, dtype) for name, (s, dtype) in shape.fields().items()}
+
+    def put_observation(self, t: int, arrays: dict[str, np.ndarray]) -> None:
+        """Copy the sampler's current observations and masks (`alive`, `first`) into step t."""
+        for key in OBS_KEYS:
+            if key in self.data:
+                self.data[key][t] = arrays[key]
+        self.data["alive"][t] = arrays["alive"]
+        self.data["first"][t] = arrays["first"]
+
+    def put_step(self, t: int, hidden: np.ndarray, actions: np.ndarray, logp: np.ndarray, values: np.ndarray,
+                 rewards: np.ndarray, done: np.ndarray) -> None:
+        """Store what happened at step t: starting memories, actions, log-probs, values, rewards, dones."""
+        d = self.data
+        d["hidden"][t], d["actions"][t], d["logp"][t], d["values"][t] = hidden, actions, logp, values
+        d["rewards"][t], d["done"][t] = rewards, done
+
+    def chunks(self, length: int) -> list[slice]:
+        """Time slices of at most `length` steps covering the rollout (truncated BPTT)."""
+        t = self.shape.steps
+        return [slice(s, min(s + length, t)) for s in range(0, t, length)]

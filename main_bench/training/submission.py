@@ -1,0 +1,63 @@
+"""A trained run as a submission directory that `main-bench evaluate` loads unchanged.
+
+Flows in: the trained `Net` and the run's settings. Flows out, in one folder: `policy.py` (`make_policy(root,
+seed)` giving one agent's `AgentPolicy`), `model.py` and `obs.py` (copies of this package's self-contained model
+and observation packing, so the policy process needs only numpy and torch), `weights.pt` (model config and
+state_dict) and `metadata.json` (the exact command, algorithm, evaluation mode, agent-steps, updates, wall time).
+"""
+
+from __future__ import annotations
+
+import io
+import shutil
+from pathlib import Path
+from typing import Any
+
+from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
+
+METADATA_VERSION = 1
+WEIGHTS = "weights.pt"
+
+POLICY_PY = '''"""A main-bench agent policy trained with `main-bench train` ({algo}); run it with --mode {mode}.
+
+`make_policy(root, seed)` loads `weights.pt` from this folder into the model of `model.py` and returns one
+agent's policy: `reset(info)`, `act(observation, inbox) -> (action, message)`. metadata.json says how it was
+trained (command, agent-steps, wall time).
+"""
+
+from pathlib import Path
+
+import torch
+from model import TrainedAgent, load_net
+
+torch.set_num_threads(1)
+
+
+def make_policy(root, seed=0):
+    """One agent of the trained team."""
+    state = torch.load(Path(root) / "weights.pt", map_location="cpu", weights_only=True)
+    return TrainedAgent(load_net(state), seed)
+'''
+
+
+def write_submission(folder: str | Path, net: Any, settings: Any, command: str, *, agent_steps: int, updates: int,
+                     wall_seconds: float) -> Path:
+    """Write the submission folder (see the module docstring); returns it."""
+    import torch
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    here = Path(__file__).resolve().parent
+    for name in ("model.py", "obs.py"):
+        shutil.copyfile(here / name, folder / name)
+    atomic_write_text(folder / "policy.py", POLICY_PY.format(algo=settings.algo, mode=settings.mode))
+    state = {"config": net.config.to_dict(), "model": {k: v.detach().cpu() for k, v in net.state_dict().items()}}
+    buffer = io.BytesIO()
+    torch.save(state, buffer)
+    atomic_write_bytes(folder / WEIGHTS, buffer.getvalue())
+    atomic_write_json(folder / "metadata.json", {
+        "schema_version": METADATA_VERSION, "command": command, "algo": settings.algo, "mode": settings.mode,
+        "agent_steps": int(agent_steps), "updates": int(updates), "wall_seconds": round(float(wall_seconds), 1),
+        "model": net.config.to_dict(), "settings": settings.to_dict(),
+    })
+    return folder

@@ -1,0 +1,289 @@
+"""The training loop: sample a rollout from the vectorised sampler, compute GAE, run PPO, log, checkpoint.
+
+Flows in: `TrainSettings` and a run folder. Flows out, in the run folder: `checkpoint.pt` (every K updates and
+at exit; a run started again on the same folder resumes from it, also after a SIGKILL), `curve.csv` and
+`curve.png` (reward, success, SPL against agent-steps), TensorBoard events under `tb/` when `tensorboard` is
+installed, and `submission/` (`submission.write_submission`), which `main-bench evaluate` scores unchanged.
+"""
+
+from __future__ import annotations
+
+import io
+import signal
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..io import atomic_write_bytes
+from ..vector.layout import EPISODE_STATS, VecSpec
+from .curves import CURVE_COLUMNS, read_curve, write_curve
+from .gae import gae
+from .settings import TrainSettings
+from .storage import Rollout, StorageShape
+
+CHECKPOINT = "checkpoint.pt"
+CHECKPOINT_VERSION = 1
+WINDOW = 50  # episodes in the curve's moving averages
+
+
+@dataclass(frozen=True)
+class TrainSummary:
+    """What a run did: updates and agent-steps in total, episodes, wall seconds of this process, the last curve
+    row, the time split (seconds) of this process, where things are, whether it resumed."""
+
+    updates: int
+    agent_steps: int
+    episodes: int
+    wall_seconds: float
+    last: dict[str, float]
+    timing: dict[str, float]
+    run_dir: str
+    submission: str
+    resumed_from: int
+    losses: list[dict[str, float]]
+
+
+def model_config(settings: TrainSettings) -> Any:
+    """The `ModelConfig` of a run."""
+    from .model import ModelConfig, message_floats_for
+
+    return ModelConfig(algo=settings.algo, agents=settings.agents, image_size=settings.image_size,
+                       use_rgb=settings.use_rgb, hidden=settings.hidden, features=settings.features,
+                       message_floats=message_floats_for(settings.algo, settings.hidden, settings.features))
+
+
+def vec_spec(settings: TrainSettings, seed: int) -> VecSpec:
+    """The sampler of a run, seeded with `seed`."""
+    cfg = model_config(settings)
+    return VecSpec(episodes=settings.episodes, split=settings.split, agents=settings.agents,
+                   num_envs=settings.num_envs, task=settings.task, goal=settings.goal, track=settings.track,
+                   image_size=settings.image_size, use_rgb=settings.use_rgb, message_floats=cfg.message_floats,
+                   seed=seed, max_steps=settings.max_steps, renderer=settings.renderer,
+                   found_penalty=settings.found_penalty, cache_dir=settings.cache_dir)
+
+
+class Trainer:
+    """One run in `run_dir` (see the module docstring); `run()` trains until the budget and writes everything."""
+
+    def __init__(self, settings: TrainSettings, run_dir: str | Path, command: str = "",
+                 progress: Callable[[str], None] | None = None) -> None:
+        import torch
+
+        from .model import Net
+
+        self.settings, self.run_dir, self.command = settings, Path(run_dir), command
+        self.progress = progress
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        if settings.device.startswith("cuda") and not torch.cuda.is_available():
+            raise InputError(f"--device {settings.device}: torch sees no CUDA device; use --device cpu")
+        self.device = settings.device
+        torch.manual_seed(settings.seed)
+        self.net = Net(model_config(settings)).to(self.device)
+        self.optimizer = torch.optim.Adam(self.net.parameters(), lr=settings.ppo.lr, eps=1e-5)
+        self.update, self.agent_steps, self.episodes, self.wall_before = 0, 0, 0, 0.0
+        self.curve: list[dict[str, float]] = []
+        self.window: deque[np.ndarray] = deque(maxlen=WINDOW)
+        self.resumed_from = self._resume()
+        self._stop = False
+
+    # -- checkpoints --------------------------------------------------------------------------------------------
+
+    def _resume(self) -> int:
+        import torch
+
+        path = self.run_dir / CHECKPOINT
+        if not path.is_file():
+            return 0
+        try:
+            state = torch.load(path, map_location=self.device, weights_only=False)
+        except Exception as exc:
+            raise InputError(f"{path}: unreadable checkpoint ({type(exc).__name__}: {exc}); delete it to start "
+                             "over") from None
+        if state.get("version") != CHECKPOINT_VERSION or state.get("config") != model_config(self.settings).to_dict():
+            raise InputError(f"{path}: checkpoint of another model or version ({state.get('config')}); use a "
+                             "new --out folder or the same settings")
+        self.net.load_state_dict(state["model"])
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.update, self.agent_steps = int(state["update"]), int(state["agent_steps"])
+        self.episodes, self.wall_before = int(state["episodes"]), float(state["wall_seconds"])
+        self.window.extend(np.asarray(w) for w in state["window"])
+        self.curve = [row for row in read_curve(self.run_dir / "curve.csv") if row["update"] <= self.update]
+        return self.update
+
+    def checkpoint(self, wall: float) -> None:
+        """Write `checkpoint.pt` atomically (model, optimiser, counters, the curve's episode window)."""
+        import torch
+
+        state = {"version": CHECKPOINT_VERSION, "config": model_config(self.settings).to_dict(),
+                 "settings": self.settings.to_dict(), "model": self.net.state_dict(),
+                 "optimizer": self.optimizer.state_dict(), "update": self.update, "agent_steps": self.agent_steps,
+                 "episodes": self.episodes, "wall_seconds": wall, "window": [w.tolist() for w in self.window]}
+        buffer = io.BytesIO()
+        torch.save(state, buffer)
+        atomic_write_bytes(self.run_dir / CHECKPOINT, buffer.getvalue())
+        write_curve(self.run_dir, self.curve)
+
+    # -- the loop -----------------------------------------------------------------------------------------------
+
+    def run(self) -> TrainSummary:
+        """Train until `updates` or `max_minutes`; checkpoint, write curves and the submission; summary."""
+        from ..vector.sampler import make_sampler
+        from .submission import write_submission
+
+        s = self.settings
+        start = self._tick = time.perf_counter()
+        # After a resume the sub-environments restart from fresh episodes, seeded by the update reached.
+        sampler = make_sampler(vec_spec(s, s.seed + 7919 * self.update), s.backend, s.workers)
+        timing = {"sample": 0.0, "forward": 0.0, "update": 0.0}
+        losses: list[dict[str, float]] = []
+        old = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGINT)}
+        for sig in old:
+            signal.signal(sig, self._on_signal)
+        tb = _tensorboard(self.run_dir)
+        try:
+            arrays = sampler.reset()
+            hidden = np.zeros((s.num_envs, s.agents, s.hidden), dtype=np.float32)
+            while self.update < s.updates and not self._stop:
+                if s.max_minutes and (time.perf_counter() - start) / 60.0 >= s.max_minutes:
+                    break
+                rollout, hidden, ended = self._collect(sampler, arrays, hidden, timing)
+                t0 = time.perf_counter()
+                loss = self._learn(rollout)
+                timing["update"] += time.perf_counter() - t0
+                losses.append(loss)
+                self.update += 1
+                row = self._curve_row(ended, time.perf_counter() - start, loss)
+                self.curve.append(row)
+                if tb is not None:
+                    for key, value in row.items():
+                        tb.add_scalar(key, value, int(row["agent_steps"]))
+                if self.progress:
+                    self.progress(_progress_line(row, s.updates))
+                if self.update % s.checkpoint_every == 0:
+                    self.checkpoint(self.wall_before + time.perf_counter() - start)
+        finally:
+            sampler.close()
+            for sig, handler in old.items():
+                signal.signal(sig, handler)
+            if tb is not None:
+                tb.close()
+        wall = time.perf_counter() - start
+        self.checkpoint(self.wall_before + wall)
+        sub = write_submission(self.run_dir / "submission", self.net, s, self.command,
+                               agent_steps=self.agent_steps, updates=self.update,
+                               wall_seconds=self.wall_before + wall)
+        return TrainSummary(updates=self.update, agent_steps=self.agent_steps, episodes=self.episodes,
+                            wall_seconds=wall, last=self.curve[-1] if self.curve else {}, timing=timing,
+                            run_dir=str(self.run_dir), submission=str(sub), resumed_from=self.resumed_from,
+                            losses=losses)
+
+    def _on_signal(self, signum: int, frame: Any) -> None:
+        self._stop = True
+
+    def _collect(self, sampler: Any, arrays: dict[str, np.ndarray], hidden: np.ndarray,
+                 timing: dict[str, float]) -> tuple[Rollout, np.ndarray, list[np.ndarray]]:
+        import torch
+
+        from .model import to_tensors
+
+        s, net, dev = self.settings, self.net, self.device
+        cfg = net.config
+        b, n = s.num_envs, s.agents
+        rollout = Rollout(StorageShape(s.rollout, b, n, s.image_size, s.use_rgb, s.hidden,
+                                       max(cfg.message_floats, 1)))
+        gen = torch.Generator().manual_seed(s.seed * 1_000_003 + self.update)
+        ended: list[np.ndarray] = []
+        for t in range(s.rollout + 1):
+            t0 = time.perf_counter()
+            hidden = hidden * ~arrays["first"][..., None]
+            with torch.no_grad():
+                d, r, v = to_tensors(arrays["depth"], arrays.get("rgb"), arrays["vec"], dev)
+                h = torch.from_numpy(hidden.reshape(b * n, -1)).to(dev)
+                messages = lengths = None
+                if cfg.comm:
+                    messages = torch.from_numpy(arrays["inbox"][..., : cfg.message_floats]).flatten(0, 1).to(dev)
+                    lengths = torch.from_numpy(arrays["inbox_len"]).flatten(0, 1).to(dev)
+                logits, h_new, message = net.step(d, r, v, h, messages, lengths)
+                alive = torch.from_numpy(arrays["alive"]).to(dev).float()
+                values = net.value(h_new.reshape(b, n, -1), alive).cpu().numpy()
+                if t == s.rollout:  # bootstrap values of the state after the rollout
+                    rollout.data["values"][t] = values
+                    timing["forward"] += time.perf_counter() - t0
+                    break
+                probs = torch.softmax(logits.cpu(), dim=1)
+                actions = torch.multinomial(probs, 1, generator=gen)[:, 0]
+                logp = torch.log(probs.gather(1, actions[:, None])[:, 0].clamp(min=1e-12))
+            rollout.put_observation(t, arrays)
+            arrays["actions"][:] = actions.numpy().reshape(b, n)
+            if message is not None:
+                arrays["messages"][..., : cfg.message_floats] = message.cpu().numpy().reshape(b, n, -1)
+            alive_now = arrays["alive"].copy()
+            timing["forward"] += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            sampler.step()
+            timing["sample"] += time.perf_counter() - t0
+            reward = arrays["reward"].copy()
+            if s.team_reward:
+                reward = np.repeat(reward.sum(axis=1, keepdims=True), n, axis=1)
+            rollout.put_step(t, hidden, actions.numpy().reshape(b, n), logp.numpy().reshape(b, n), values,
+                             reward, arrays["done"])
+            self.agent_steps += int(alive_now.sum())
+            hidden = h_new.cpu().numpy().reshape(b, n, -1)
+            for row in np.flatnonzero(arrays["stats"][:, 0] > 0):
+                ended.append(arrays["stats"][row].copy())
+        return rollout, hidden, ended
+
+    def _learn(self, rollout: Rollout) -> dict[str, float]:
+        from .ppo import ppo_update
+
+        p, d = self.settings.ppo, rollout.data
+        advantages, returns = gae(d["rewards"], d["values"], d["done"], d["alive"], p.gamma, p.gae_lambda)
+        rng = np.random.default_rng([self.settings.seed, self.update])
+        self.net.train()
+        out = ppo_update(self.net, self.optimizer, d, advantages, returns, p, rng, self.device)
+        self.net.eval()
+        return out
+
+    def _curve_row(self, ended: list[np.ndarray], seconds: float, loss: dict[str, float]) -> dict[str, float]:
+        self.episodes += len(ended)
+        self.window.extend(ended)
+        stats = np.array(self.window) if self.window else np.full((1, len(EPISODE_STATS)), np.nan)
+        mean = dict(zip(EPISODE_STATS, np.nanmean(stats, axis=0), strict=True))
+        previous = self.curve[-1]["agent_steps"] if self.curve else 0
+        row = {"update": float(self.update), "agent_steps": float(self.agent_steps),
+               "episodes": float(self.episodes), "wall_seconds": self.wall_before + seconds,
+               "reward": float(mean["ep_return"]), "team_success": float(mean["ep_team_success"]),
+               "success": float(mean["ep_success"]), "spl": float(mean["ep_spl"]),
+               "episode_length": float(mean["ep_length"]), **loss}
+        now = time.perf_counter()
+        row["steps_per_second"] = (self.agent_steps - previous) / max(now - self._tick, 1e-9)
+        self._tick = now
+        return {k: row.get(k, float("nan")) for k in CURVE_COLUMNS}
+
+
+def _progress_line(row: dict[str, float], total: int) -> str:
+    return (f"update {int(row['update'])}/{total}  agent-steps {int(row['agent_steps']):,}  "
+            f"{row['steps_per_second']:.0f} agent-steps/s  episodes {int(row['episodes'])}  "
+            f"success {row['success']:.2f}  team success {row['team_success']:.2f}  reward {row['reward']:.2f}")
+
+
+def _tensorboard(run_dir: Path) -> Any:
+    """A TensorBoard writer under `run_dir/tb` when `tensorboard` is installed, else None."""
+    try:
+        import tensorboard  # noqa: F401
+        from torch.utils.tensorboard import SummaryWriter
+    except ImportError:
+        return None
+    return SummaryWriter(str(run_dir / "tb"))
+
+
+def train(settings: TrainSettings, run_dir: str | Path, command: str = "",
+          progress: Callable[[str], None] | None = None) -> TrainSummary:
+    """Train (or resume) a run in `run_dir`; see `Trainer`."""
+    return Trainer(settings, run_dir, command, progress).run()

@@ -1,0 +1,113 @@
+"""One sub-environment of a vectorised sampler: steps a `MainParallelEnv` from the shared action arrays and
+writes its packed results into row b of the shared arrays; resets itself when its episode ends.
+
+The same code runs in a worker process (arrays in shared memory), in a Ray actor (arrays of its own, sent
+back as one block per step) and in-process (tests). Infos are numeric only (`layout.EPISODE_STATS`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..training.obs import pack_observation
+from .layout import EPISODE_STATS, VecSpec
+
+
+class SubEnv:
+    """Sub-environment b of `spec`, writing into row b of `arrays` (see `layout.layout`)."""
+
+    def __init__(self, spec: VecSpec, b: int) -> None:
+        from ..env import MainParallelEnv
+
+        self.spec, self.b = spec, b
+        self.env = MainParallelEnv(spec.episodes, spec.split, agents=spec.agents, task=spec.task, goal=spec.goal,
+                                   track=spec.track, renderer=spec.renderer, image_size=spec.image_size,
+                                   max_steps=spec.max_steps, seed=spec.env_seed(b),
+                                   message_floats=spec.message_floats, cache_dir=spec.cache_dir)
+        self.ids = list(self.env.possible_agents)
+        self._episodes = 0
+
+    def reset(self, arrays: dict[str, np.ndarray]) -> None:
+        """Start a new episode; write its first observations (all agents alive, `first` set)."""
+        seed = self.spec.env_seed(self.b) * 7919 + self._episodes if self._episodes == 0 else None
+        observations, infos = self.env.reset(seed=seed)
+        self._episodes += 1
+        n = len(self.ids)
+        self._return = 0.0
+        self._length = 0
+        self._geodesic = np.array([infos[a]["distance_to_goal"] for a in self.ids], dtype=np.float64)
+        self._path = np.zeros(n)
+        self._last_pos = np.array(self.env._sim.positions, dtype=np.float64)  # noqa: SLF001
+        self._success = np.zeros(n, dtype=bool)
+        self._write_obs(arrays, observations)
+        arrays["alive"][self.b] = True
+        arrays["first"][self.b] = True
+
+    def step(self, arrays: dict[str, np.ndarray]) -> None:
+        """Step with row b of `actions` (and `messages`); write rewards, dones, alive, next observations, and
+        the episode statistics when it ended (then reset)."""
+        b, env = self.b, self.env
+        live = list(env.agents)
+        actions: dict[str, Any] = {}
+        floats = self.spec.message_floats
+        actions_taken = arrays["actions"][b].copy()
+        for a in live:
+            i = self.ids.index(a)
+            act = int(arrays["actions"][b, i])
+            actions[a] = (act, arrays["messages"][b, i, :floats].copy()) if floats else act
+        observations, rewards, terms, truncs, infos = env.step(actions)
+        pos = np.array(env._sim.positions, dtype=np.float64)  # noqa: SLF001
+        moved = np.linalg.norm(pos - self._last_pos, axis=1)
+        self._last_pos = pos
+        reward = np.zeros(len(self.ids), dtype=np.float32)
+        done = ~arrays["alive"][b].copy()
+        for a in live:
+            i = self.ids.index(a)
+            reward[i] = rewards[a]
+            if actions_taken[i] == 0 and not infos[a]["success"]:
+                reward[i] -= self.spec.found_penalty
+            self._path[i] += moved[i]
+            self._success[i] = bool(infos[a]["success"])
+            done[i] = bool(terms[a] or truncs[a])
+        self._return += float(reward.sum())
+        self._length += 1
+        arrays["reward"][b] = reward
+        arrays["done"][b] = done
+        arrays["success"][b] = self._success
+        arrays["stats"][b] = 0.0
+        if env.agents:
+            alive = np.array([a in env.agents for a in self.ids])
+            self._write_obs(arrays, {a: observations[a] for a in env.agents})
+            arrays["alive"][b] = alive
+            arrays["first"][b] = False
+            return
+        team = next((bool(infos[a]["team_success"]) for a in live if "team_success" in infos[a]), False)
+        spl = self._success * self._geodesic / np.maximum(np.maximum(self._geodesic, self._path), 1e-9)
+        stats = dict(ep_end=1.0, ep_team_success=float(team), ep_success=float(self._success.mean()),
+                     ep_spl=float(spl.mean()), ep_return=self._return, ep_length=float(self._length))
+        arrays["stats"][b] = [stats[k] for k in EPISODE_STATS]
+        self.reset(arrays)
+
+    def _write_obs(self, arrays: dict[str, np.ndarray], observations: dict[str, dict[str, Any]]) -> None:
+        b, use_rgb = self.b, self.spec.use_rgb
+        arrays["depth"][b] = 0
+        arrays["vec"][b] = 0.0
+        arrays["inbox"][b] = 0.0
+        arrays["inbox_len"][b] = 0
+        for a, obs in observations.items():
+            i = self.ids.index(a)
+            depth, rgb, vec = pack_observation(obs, use_rgb)
+            arrays["depth"][b, i] = depth
+            arrays["vec"][b, i] = vec
+            if use_rgb:
+                arrays["rgb"][b, i] = rgb
+            if "inbox" in obs:
+                f = self.spec.message_floats
+                arrays["inbox"][b, i, :, :f] = obs["inbox"]["messages"]
+                arrays["inbox_len"][b, i] = obs["inbox"]["lengths"]
+
+    def close(self) -> None:
+        """Close the simulator."""
+        self.env.close()
