@@ -33,6 +33,7 @@ COMM_ALGOS = ALGOS[3:]
 NUM_ACTIONS = 4
 NUM_CATEGORIES = 64  # category embedding rows; larger ids share the last row
 COMM_SUMMARY = NUM_ACTIONS + 1  # comm-s: action probabilities and value
+FOUND_BIAS = -5.0  # initial logit of `found`: an untrained agent calls it about once in 450 steps
 MESSAGE_CAP = 32  # the evaluator's default comm channel: 32 float32 values per message
 
 
@@ -99,8 +100,8 @@ class Net(nn.Module):
         critic_in = config.hidden * config.agents + 2 * config.agents if config.centralized else config.hidden
         self.critic = nn.Sequential(nn.Linear(critic_in, 64), nn.ReLU(), nn.Linear(64, 1))
         nn.init.orthogonal_(self.actor.weight, gain=0.01)
-        with torch.no_grad():  # start rarely calling `found` (it ends an agent's episode)
-            self.actor.bias.copy_(torch.tensor([-2.0, 0.0, 0.0, 0.0]))
+        with torch.no_grad():  # start rarely calling `found` (it ends the episode, or the agent's, at once)
+            self.actor.bias.copy_(torch.tensor([FOUND_BIAS, 0.0, 0.0, 0.0]))
 
     def _heard_width(self) -> int:
         c = self.config
@@ -115,7 +116,7 @@ class Net(nn.Module):
             image = torch.cat([image, rgb.float().permute(0, 3, 1, 2) / 255.0], dim=1)
         cat = self.category((vec[:, 8].long() + 1).clamp(0, NUM_CATEGORIES))
         goal = vec[:, :8].clone()
-        goal[:, 0] = torch.log1p(goal[:, 0])
+        goal[:, 0] = torch.log1p(goal[:, 0].clamp(min=0.0))
         goal[:, 3:6] = goal[:, 3:6] / 10.0
         return self.fuse(torch.cat([self.cnn(image), cat, torch.relu(self.goal(goal))], dim=1))
 
@@ -158,7 +159,11 @@ class Net(nn.Module):
                    lengths: torch.Tensor | None) -> torch.Tensor:
         if not self.config.comm:
             return feature
-        return torch.cat([feature, self.heard(messages, lengths)], dim=1)
+        if messages is None or lengths is None:  # nothing heard
+            heard = feature.new_zeros(feature.shape[0], self._heard_width())
+        else:
+            heard = self.heard(messages, lengths)
+        return torch.cat([feature, heard], dim=1)
 
     def message(self, feature: torch.Tensor, hidden: torch.Tensor, logits: torch.Tensor) -> torch.Tensor:
         """The message a comm variant sends (detached): `comm-s` action probabilities and value, `comm-v` the

@@ -1,0 +1,76 @@
+"""`main-bench train run` for each of the seven algorithms on the tiny scene: trains a few updates, checkpoints,
+resumes after SIGKILL, and leaves a submission that passes `check-agent` and `evaluate` in its mode."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from main_bench.training.model import ALGOS, COMM_ALGOS
+
+pytestmark = pytest.mark.slow
+
+
+def _cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "main_bench.cli.app", *args], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def _train_args(tiny_dataset, out: Path, algo: str, updates: int, sampler: str) -> list[str]:
+    dataset, cache = tiny_dataset
+    return ["train", "run", "--episodes", str(dataset), "--split", "val", "--out", str(out), "--algo", algo,
+            "--image-size", "16", "-B", "2", "--workers", "2", "--sampler", sampler, "--rollout", "8",
+            "--updates", str(updates), "--checkpoint-every", "1", "--hidden", "16", "--epochs", "1", "--bptt", "4",
+            "--cache-dir", str(cache), "--seed", "3"]
+
+
+def _kill_after_first_checkpoint(args: list[str], run: Path) -> None:
+    proc = subprocess.Popen([sys.executable, "-m", "main_bench.cli.app", *args], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, start_new_session=True)
+    deadline = time.monotonic() + 300
+    try:
+        while not (run / "checkpoint.pt").is_file():
+            assert proc.poll() is None, proc.stderr.read().decode()
+            assert time.monotonic() < deadline, "no checkpoint written in time"
+            time.sleep(0.2)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the trainer and its sampler workers: no chance to clean up
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_algo_trains_checkpoints_resumes_after_kill_and_submits(tiny_dataset, tmp_path, algo):
+    run = tmp_path / algo
+    sampler = "process" if algo in ("ippo", "comm-rm") else "inline"
+    _kill_after_first_checkpoint(_train_args(tiny_dataset, run, algo, 1000, sampler), run)
+    done = _cli(*_train_args(tiny_dataset, run, algo, 3, sampler), "--json")
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert summary["resumed_from"] >= 1 and summary["updates"] == max(3, summary["resumed_from"])
+    assert summary["mode"] == ("comm" if algo in COMM_ALGOS else "silent")
+    lines = (run / "curve.csv").read_text().splitlines()
+    assert lines[0].startswith("update,agent_steps") and len(lines) == summary["updates"] + 1
+    assert (run / "curve.png").stat().st_size > 0
+    sub = Path(summary["submission"])
+    meta = json.loads((sub / "metadata.json").read_text())
+    assert meta["algo"] == algo and meta["updates"] == summary["updates"] and "train run" in meta["command"]
+    assert meta["agent_steps"] == summary["agent_steps"] > 0 and meta["wall_seconds"] > 0
+
+    dataset, cache = tiny_dataset
+    mode = summary["mode"]
+    check = _cli("evaluate", "check-agent", str(sub), "--mode", mode, "--track", "gps", "--goal", "point",
+                 "--steps", "6", "--json")
+    assert check.returncode == 0, check.stdout + check.stderr
+    scored = _cli("evaluate", "--episodes", str(dataset), "--split", "val", "--agent", str(sub), "--mode", mode,
+                  "--track", "gps", "--limit", "1", "--out", str(tmp_path / "eval"), "--cache-dir", str(cache),
+                  "--no-progress", "--json")
+    assert scored.returncode == 0, scored.stdout + scored.stderr
+    assert json.loads(scored.stdout)["episodes_run"] >= 2
