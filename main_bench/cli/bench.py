@@ -10,7 +10,7 @@ from ..errors import InputError
 from .common import JsonOption, emit
 
 #: Benchmark areas: each is a module `main_bench.benchmarks.<area>` with `run(quick: bool) -> dict`.
-AREAS = ("navmesh", "episodes", "sim", "sandbox", "e2e", "large", "modes")
+AREAS = ("navmesh", "episodes", "sim", "sandbox", "e2e", "large", "modes", "training")
 
 
 def register(app: typer.Typer) -> None:

@@ -43,6 +43,8 @@ class TrainSettings:
     renderer: str = "auto"
     found_penalty: float = 0.0
     cache_dir: str | None = None
+    step_penalty: float = 0.01
+    success_bonus: float = 2.5
     ppo: PPOSettings = field(default_factory=PPOSettings)
 
     def __post_init__(self) -> None:

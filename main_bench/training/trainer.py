@@ -65,7 +65,8 @@ def vec_spec(settings: TrainSettings, seed: int) -> VecSpec:
                    num_envs=settings.num_envs, task=settings.task, goal=settings.goal, track=settings.track,
                    image_size=settings.image_size, use_rgb=settings.use_rgb, message_floats=cfg.message_floats,
                    seed=seed, max_steps=settings.max_steps, renderer=settings.renderer,
-                   found_penalty=settings.found_penalty, cache_dir=settings.cache_dir)
+                   found_penalty=settings.found_penalty, cache_dir=settings.cache_dir,
+                   step_penalty=settings.step_penalty, success_bonus=settings.success_bonus)
 
 
 class Trainer:
@@ -253,8 +254,8 @@ class Trainer:
     def _curve_row(self, ended: list[np.ndarray], seconds: float, loss: dict[str, float]) -> dict[str, float]:
         self.episodes += len(ended)
         self.window.extend(ended)
-        stats = np.array(self.window) if self.window else np.full((1, len(EPISODE_STATS)), np.nan)
-        mean = dict(zip(EPISODE_STATS, np.nanmean(stats, axis=0), strict=True))
+        averages = np.array(self.window).mean(axis=0) if self.window else np.full(len(EPISODE_STATS), np.nan)
+        mean = dict(zip(EPISODE_STATS, averages, strict=True))
         previous = self.curve[-1]["agent_steps"] if self.curve else 0
         row = {"update": float(self.update), "agent_steps": float(self.agent_steps),
                "episodes": float(self.episodes), "wall_seconds": self.wall_before + seconds,

@@ -21,6 +21,7 @@ EPISODE_STATS = ("ep_end", "ep_team_success", "ep_success", "ep_spl", "ep_return
 class VecSpec:
     """What one sampler runs: the data set, split, team size N, B sub-environments, the track, goal kind, the
     square image side, RGB besides depth, message floats (0: no channel), the base seed, step limit, and a
+    env's reward settings (`env.RewardSettings`: `step_penalty`, `success_bonus`, `distance_weight`) and a
     training-only shaping term: `found_penalty` is subtracted from an agent's reward when it calls `found` and
     the call is not correct (the env's reward has no such term; it keeps untrained agents from learning to
     end episodes at once)."""
@@ -40,6 +41,9 @@ class VecSpec:
     renderer: str = "auto"
     found_penalty: float = 0.0
     cache_dir: str | None = None
+    step_penalty: float = 0.01
+    success_bonus: float = 2.5
+    distance_weight: float = 1.0
 
     def env_seed(self, b: int) -> int:
         """Seed of sub-environment b: depends on the base seed and b only (never on the worker count)."""

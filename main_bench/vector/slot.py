@@ -19,13 +19,14 @@ class SubEnv:
     """Sub-environment b of `spec`, writing into row b of `arrays` (see `layout.layout`)."""
 
     def __init__(self, spec: VecSpec, b: int) -> None:
-        from ..env import MainParallelEnv
+        from ..env import MainParallelEnv, RewardSettings
 
         self.spec, self.b = spec, b
         self.env = MainParallelEnv(spec.episodes, spec.split, agents=spec.agents, task=spec.task, goal=spec.goal,
                                    track=spec.track, renderer=spec.renderer, image_size=spec.image_size,
                                    max_steps=spec.max_steps, seed=spec.env_seed(b),
-                                   message_floats=spec.message_floats, cache_dir=spec.cache_dir)
+                                   message_floats=spec.message_floats, cache_dir=spec.cache_dir,
+                                   reward=RewardSettings(spec.distance_weight, spec.success_bonus, spec.step_penalty))
         self.ids = list(self.env.possible_agents)
         self._episodes = 0
 

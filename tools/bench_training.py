@@ -1,0 +1,10 @@
+"""Training speed benchmark: `python tools/bench_training.py [--json] [--quick]` (see
+main_bench.benchmarks.training)."""
+
+from __future__ import annotations
+
+from main_bench.benchmarks import tool_main
+from main_bench.benchmarks.training import run, summary_lines
+
+if __name__ == "__main__":
+    tool_main(__doc__, "B = 1 and 4, one repeat, two updates", run, lambda result: "\n".join(summary_lines(result)))
