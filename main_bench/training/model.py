@@ -1,7 +1,8 @@
 """The MAIN paper's model family (§4) for the seven `--algo` values, in one self-contained file.
 
-Self-contained on purpose (imports only numpy and torch): a trained submission directory holds a copy of this
-file next to its `policy.py`, so the evaluator's isolated policy process needs nothing from main_bench.
+Self-contained on purpose (imports only numpy, torch and the numpy-only `obs.py` beside it): a trained
+submission directory holds copies of both next to its `policy.py` (the copy's import of `obs` made absolute),
+so the evaluator's isolated policy process needs nothing from main_bench.
 
 Flow per step for a (B, N) block of agents (B sub-environments of an N-agent team):
 `pack_observation` turns one agent's observation dict into three arrays (depth in uint16 millimetres, RGB
@@ -23,10 +24,7 @@ import numpy as np
 import torch
 from torch import nn
 
-try:  # inside the main_bench package
-    from .obs import MAX_DEPTH_MM, VEC, pack_observation
-except ImportError:  # a submission directory: obs.py is a sibling file
-    from obs import MAX_DEPTH_MM, VEC, pack_observation  # type: ignore[no-redef]
+from .obs import MAX_DEPTH_MM, VEC, pack_observation  # a submission's copy imports its sibling obs.py
 
 ALGOS = ("multi-ppo", "ippo", "mappo", "comm-s", "comm-v", "comm-rm", "comm-rv")
 COMM_ALGOS = ALGOS[3:]
