@@ -22,6 +22,7 @@ def register(app: typer.Typer) -> None:
                         no_args_is_help=True)
     group.command("run")(run)
     group.command("point-goals")(point_goals)
+    group.command("export")(export)
     app.add_typer(group, name="train")
 
 
@@ -114,3 +115,15 @@ def point_goals(
 
     path = point_goal_dataset(src, out, overwrite=overwrite)
     emit("train point-goals", {"out": str(path)}, as_json, lambda d: f"wrote {d['out']}")
+
+
+def export(
+    run_dir: Path = typer.Argument(..., help="Run folder holding checkpoint.pt."),
+    out: Path = typer.Option(..., "--out", help="Submission folder to write."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Write the submission of a run's last checkpoint (e.g. while it still trains, or after a crash)."""
+    from ..training.submission import export_checkpoint
+
+    path = export_checkpoint(run_dir, out, "main-bench " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
+    emit("train export", {"out": str(path)}, as_json, lambda d: f"wrote {d['out']}")

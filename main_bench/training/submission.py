@@ -64,3 +64,24 @@ def write_submission(folder: str | Path, net: Any, settings: Any, command: str, 
         "model": net.config.to_dict(), "settings": settings.to_dict(),
     })
     return folder
+
+
+def export_checkpoint(run_dir: str | Path, folder: str | Path, command: str = "") -> Path:
+    """Write the submission of a run's last checkpoint (`run_dir/checkpoint.pt`) to `folder`; returns it."""
+    import torch
+
+    from ..errors import InputError
+    from .model import ModelConfig, Net
+    from .ppo import PPOSettings
+    from .settings import TrainSettings
+
+    path = Path(run_dir) / "checkpoint.pt"
+    if not path.is_file():
+        raise InputError(f"{path}: no checkpoint; train first (main-bench train run --out {run_dir})")
+    state = torch.load(path, map_location="cpu", weights_only=False)
+    net = Net(ModelConfig(**state["config"]))
+    net.load_state_dict(state["model"])
+    settings = TrainSettings(**{**state["settings"], "ppo": PPOSettings(**state["settings"]["ppo"])})
+    return write_submission(folder, net, settings, command or f"checkpoint of {run_dir}",
+                            agent_steps=state["agent_steps"], updates=state["update"],
+                            wall_seconds=state["wall_seconds"])

@@ -64,6 +64,16 @@ def test_algo_trains_checkpoints_resumes_after_kill_and_submits(tiny_dataset, tm
     assert meta["algo"] == algo and meta["updates"] == summary["updates"] and "train run" in meta["command"]
     assert meta["agent_steps"] == summary["agent_steps"] > 0 and meta["wall_seconds"] > 0
 
+    exported = _cli("train", "export", str(run), "--out", str(tmp_path / "exported"))
+    assert exported.returncode == 0, exported.stderr
+    again = json.loads((tmp_path / "exported" / "metadata.json").read_text())
+    assert again["updates"] == summary["updates"] and again["model"] == meta["model"]
+    import torch
+
+    ours, theirs = (torch.load(f / "weights.pt", weights_only=True) for f in (tmp_path / "exported", sub))
+    assert ours["config"] == theirs["config"]
+    assert all(torch.equal(ours["model"][k], theirs["model"][k]) for k in theirs["model"])
+
     dataset, cache = tiny_dataset
     mode = summary["mode"]
     check = _cli("evaluate", "check-agent", str(sub), "--mode", mode, "--track", "gps", "--goal", "point",
