@@ -87,7 +87,7 @@ class MainParallelEnv(ParallelEnv):
 
         from .episodes.dataset import load_episodes, read_manifest
         from .evaluation.resources import EpisodeResources
-        from .evaluation.task_rules import max_steps_of, sim_settings_from_manifest
+        from .evaluation.scoring.task_rules import max_steps_of, sim_settings_from_manifest
 
         if track not in TRACKS:
             raise InputError(f"track must be one of {', '.join(TRACKS)}, got {track!r}")
@@ -165,7 +165,7 @@ class MainParallelEnv(ParallelEnv):
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
         """Start an episode: `options["episode_id"]`, else one drawn from the generator (reseeded by `seed`)."""
         from .evaluation.episode_loop import LoopSettings
-        from .evaluation.task_rules import rules_from_manifest
+        from .evaluation.scoring.task_rules import rules_from_manifest
         from .sim.task import EpisodeJudge, TaskRules
 
         if seed is not None:

@@ -37,8 +37,8 @@ class Policy:
 
 def _one(spec: Any, sandboxed: bool, steps: int) -> dict[str, Any]:
     from ..evaluation.check import CheckSettings, synthetic_episode_info, synthetic_observations
-    from ..evaluation.isolation import Limits, PolicyProcess
-    from ..evaluation.sandbox import SandboxSettings
+    from ..evaluation.process.isolation import Limits, PolicyProcess
+    from ..evaluation.process.sandbox import SandboxSettings
 
     settings = CheckSettings(agents=3)
     info = synthetic_episode_info(settings)

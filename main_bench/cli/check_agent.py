@@ -40,8 +40,8 @@ def check_agent(
     policy protocol), answers with valid actions (and messages) for exactly the acting agents, is deterministic
     for a seed and stays within the time limit, in its own process (one per agent for agent policies)."""
     from ..evaluation.check import CheckSettings, check_policy
-    from ..evaluation.isolation import Limits
-    from ..evaluation.sandbox import SandboxSettings, require_sandbox
+    from ..evaluation.process.isolation import Limits
+    from ..evaluation.process.sandbox import SandboxSettings, require_sandbox
     from ..evaluation.submission import parse_spec
 
     policy_spec = parse_spec(spec)

@@ -63,7 +63,7 @@ class ValidationReport:
                    if self.rechecked else ""))
         lines = [head]
         if self.manifest_hash:
-            from ..evaluation.task_rules import describe_rules
+            from ..evaluation.scoring.task_rules import describe_rules
 
             lines += [f"  manifest sha256 {self.manifest_hash}", f"  task rules: {describe_rules(self.task_rules)}"]
         for p in self.problems[:limit]:
@@ -212,7 +212,7 @@ def validate_dataset(dataset: str | Path, *, recheck: bool = False, sample: int 
     root = Path(dataset)
     if not root.exists():
         raise InputError("episode data set not found", path=root)
-    from ..evaluation.task_rules import rules_json
+    from ..evaluation.scoring.task_rules import rules_json
 
     manifest = read_manifest(root)
     report = ValidationReport(dataset=root, manifest_hash=manifest.manifest_hash, task_rules=rules_json(manifest))

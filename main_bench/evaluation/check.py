@@ -17,8 +17,9 @@ import numpy as np
 
 from ..errors import InputError, SubmissionError
 from ..scenes.objects import KNOWN_CATEGORIES
-from .isolation import Limits, PolicyError, PolicyProcess
-from .isolation_check import Trap
+from .process.isolation import Limits, PolicyError, PolicyProcess
+from .process.isolation_check import Trap
+from .process.sandbox import SandboxSettings
 from .protocol import (
     DEFAULT_MESSAGE_FLOATS,
     MODES,
@@ -28,7 +29,6 @@ from .protocol import (
     agent_ids,
     observation_space,
 )
-from .sandbox import SandboxSettings
 from .submission import PolicySpec, ProtocolError, parse_spec
 
 CHECK_NAMES: tuple[str, ...] = (

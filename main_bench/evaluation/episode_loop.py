@@ -19,8 +19,8 @@ import numpy as np
 from ..episodes.schema import Episode
 from ..scenes.objects import KNOWN_CATEGORIES
 from ..sim.task import EpisodeJudge, TaskRules
-from .metrics import EpisodeTrace
 from .protocol import FOUND, EpisodeInfo, TargetInfo, agent_ids
+from .scoring.metrics import EpisodeTrace
 
 
 class EpisodeFailure(Exception):

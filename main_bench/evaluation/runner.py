@@ -21,9 +21,9 @@ from .baselines import privileged_baseline
 from .chunks import Chunk, make_chunks
 from .ledger import verified_files
 from .results import _read
+from .scoring.summary import build_summary
+from .scoring.task_rules import rules_json
 from .settings import EvalSettings, SubmissionMeta
-from .summary import build_summary
-from .task_rules import rules_json
 
 RUN_FILE = "run.json"
 SUBMISSION_FILE = "submission.json"
@@ -148,7 +148,7 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
     """
     t0 = time.perf_counter()
     if privileged_baseline(settings.agent) is None:
-        from .sandbox import require_sandbox
+        from .process.sandbox import require_sandbox
         from .submission import parse_spec
 
         parse_spec(settings.agent)  # a malformed spec fails now, before any file is written

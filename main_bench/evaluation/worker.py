@@ -23,12 +23,12 @@ from . import ledger
 from .baselines import privileged_baseline
 from .chunks import Chunk
 from .episode_loop import EpisodeFailure, LoopSettings, run_episode
-from .metrics import EpisodeTrace, episode_metrics
 from .records import RECORD_SCHEMA, TRAJECTORY_SCHEMA
 from .resources import EpisodeResources
 from .results import write_part
+from .scoring.metrics import EpisodeTrace, episode_metrics
+from .scoring.task_rules import rules_from_manifest, sim_settings_from_manifest
 from .settings import EvalSettings
-from .task_rules import rules_from_manifest, sim_settings_from_manifest
 
 
 @dataclass(frozen=True)
@@ -49,15 +49,15 @@ class _IsolatedPolicy:
     uses_pixels = True
 
     def __init__(self, settings: EvalSettings, manifest: Any) -> None:
-        from .isolation import PolicyProcess
-        from .sandbox import evaluation_sandbox
+        from .process.isolation import PolicyProcess
+        from .process.sandbox import evaluation_sandbox
         from .submission import parse_spec
 
         sandbox = evaluation_sandbox(settings, manifest)
         self._proc = PolicyProcess(parse_spec(settings.agent), process_limits(settings), settings.seed, sandbox)
 
     def reset(self, info: Any) -> None:
-        from .isolation import PolicyError
+        from .process.isolation import PolicyError
 
         try:
             self._proc.reset(info)
@@ -65,7 +65,7 @@ class _IsolatedPolicy:
             raise EpisodeFailure(exc.reason) from None
 
     def act(self, observations: dict[str, dict]) -> dict[str, int]:
-        from .isolation import PolicyError
+        from .process.isolation import PolicyError
 
         try:
             return self._proc.act(observations)
@@ -194,7 +194,7 @@ def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[in
         kind = next(k for k in PRIVILEGED if settings.agent.strip() == f"baseline:{k}")
         return (lambda i: PrivilegedAgent(kind, i, settings.seed)), True
     from .agents import ProcessEndpoint
-    from .sandbox import evaluation_sandbox
+    from .process.sandbox import evaluation_sandbox
     from .submission import parse_spec
 
     limits, spec, sandbox = process_limits(settings), parse_spec(settings.agent), evaluation_sandbox(settings, manifest)
@@ -204,7 +204,7 @@ def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[in
 def process_limits(settings: EvalSettings) -> Any:
     """The `isolation.Limits` of every policy process of an evaluation (its `--step-seconds`,
     `--episode-seconds`, `--memory-mb`, and `--gpu` as the torch device)."""
-    from .isolation import Limits
+    from .process.isolation import Limits
 
     return Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
                   memory_mb=settings.limits.memory_mb,

@@ -30,7 +30,7 @@ from __future__ import annotations
 from typing import Any
 
 from .. import __version__
-from ..evaluation.summary import finite_or_none
+from ..evaluation.scoring.summary import finite_or_none
 from .report import LEADERBOARD_SCHEMA_VERSION, Section
 from .submissions import Submission
 from .tables import TRACK_METRICS, TableSettings

@@ -2,7 +2,7 @@
 
 A track is one (split, task, number of agents). Every number is a mean over the episodes' team records with
 its 95% bootstrap confidence interval resampling episodes, seeded by the rule `summary.json` uses
-(`main_bench.evaluation.intervals`), so both print the same digits; success rates also carry their Wilson
+(`main_bench.evaluation.scoring.intervals`), so both print the same digits; success rates also carry their Wilson
 score interval. Adjacent methods of a track are compared by a paired bootstrap of team SPL over the episodes
 both were scored on (`TrackEntry.versus_next`).
 """
@@ -16,7 +16,7 @@ from types import MappingProxyType
 import numpy as np
 import pandas as pd
 
-from ..evaluation.intervals import (
+from ..evaluation.scoring.intervals import (
     PairedDifference,
     cluster_bootstrap_ci,
     interval_seed,

@@ -101,7 +101,7 @@ def travel_vs_agents(frame: pd.DataFrame, seed: int) -> StatsFigure:
 
     Shared-target: min over agents; individual-target: sum over agents. 95% bootstrap intervals.
     """
-    from ..evaluation.intervals import cluster_bootstrap_ci
+    from ..evaluation.scoring.intervals import cluster_bootstrap_ci
 
     ep = episode_travel(frame)
     rows = []

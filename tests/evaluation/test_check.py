@@ -45,7 +45,7 @@ def test_good_policy_passes_every_check():
     ],
 )
 def test_each_problem_fails_its_check(name, failing, words):
-    from main_bench.evaluation.isolation import Limits
+    from main_bench.evaluation.process.isolation import Limits
 
     settings = CheckSettings(steps=4, width=32, height=32, limits=Limits(step_seconds=3.0))
     report = check_policy(str(POLICIES / name), settings)

@@ -19,10 +19,10 @@ import pytest
 
 from main_bench.episodes.dataset import load_episodes
 from main_bench.errors import PolicyFailure
-from main_bench.evaluation.metrics import episode_metrics, trace_from_frame
 from main_bench.evaluation.records import TEAM
 from main_bench.evaluation.results import _read, load_results
 from main_bench.evaluation.runner import evaluate
+from main_bench.evaluation.scoring.metrics import episode_metrics, trace_from_frame
 from main_bench.evaluation.settings import EvalSettings, PolicyLimits
 
 POLICIES = Path(__file__).parent / "policies"

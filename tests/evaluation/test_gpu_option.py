@@ -6,8 +6,8 @@ import pytest
 from mb_testing import need
 
 from main_bench.errors import InputError
-from main_bench.evaluation.isolation import Limits
-from main_bench.evaluation.policy_child import TORCH_DEVICE_VAR
+from main_bench.evaluation.process.isolation import Limits
+from main_bench.evaluation.process.policy_child import TORCH_DEVICE_VAR
 from main_bench.evaluation.settings import EvalSettings
 from main_bench.sim.render import gl as gl_backend
 
@@ -45,7 +45,7 @@ def test_gpu_setting_reaches_the_renderer_and_the_policy_process(tmp_path):
 
 def test_policy_process_gets_the_torch_device(tmp_path):
     """The policy process sees MAIN_BENCH_TORCH_DEVICE when Limits.torch_device is set."""
-    from main_bench.evaluation.isolation import PolicyProcess
+    from main_bench.evaluation.process.isolation import PolicyProcess
     from main_bench.evaluation.submission import parse_spec
 
     policy = tmp_path / "env_policy.py"

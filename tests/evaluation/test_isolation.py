@@ -1,4 +1,4 @@
-"""The isolated policy process (`main_bench.evaluation.isolation`): transfer, validation, limits, lifecycle."""
+"""The isolated policy process (`main_bench.evaluation.process.isolation`): transfer, validation, limits, lifecycle."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from main_bench.errors import InputError, SubmissionError
-from main_bench.evaluation.isolation import Limits, PolicyError, PolicyProcess, validate_actions
-from main_bench.evaluation.policy_child import encode_actions
+from main_bench.evaluation.process.isolation import Limits, PolicyError, PolicyProcess, validate_actions
+from main_bench.evaluation.process.policy_child import encode_actions
 from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo, agent_ids
 from main_bench.evaluation.submission import ProtocolError, parse_spec
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from main_bench.evaluation.isolation import Limits, PolicyError, PolicyProcess
+from main_bench.evaluation.process.isolation import Limits, PolicyError, PolicyProcess
 from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo, agent_ids
 from main_bench.evaluation.submission import parse_spec
 

@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from main_bench.evaluation.intervals import cluster_bootstrap_ci
-from main_bench.evaluation.metrics import (
+from main_bench.evaluation.scoring.intervals import cluster_bootstrap_ci
+from main_bench.evaluation.scoring.metrics import (
     EpisodeTrace,
     efficiency,
     episode_metrics,

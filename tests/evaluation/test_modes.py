@@ -162,7 +162,7 @@ def test_a_peeking_agent_learns_nothing_it_could_use(tiny_dataset, tmp_path):
     """The peeker tries the evaluator's objects, its parent's memory, the data set named on the command line
     and shared memory; anything found makes it call `found` at once (honest: after 20 moves). Its score equals
     the honest policy's."""
-    from main_bench.evaluation.sandbox import sandbox_problem
+    from main_bench.evaluation.process.sandbox import sandbox_problem
 
     problem = sandbox_problem()
     need(problem is None, f"the policy sandbox that hides the evaluator's files and memory: {problem}")

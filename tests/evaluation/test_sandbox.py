@@ -20,11 +20,11 @@ import pytest
 from mb_testing import need
 
 from main_bench.evaluation.check import CheckSettings, synthetic_episode_info, synthetic_observations
-from main_bench.evaluation.isolation import Limits, PolicyProcess
-from main_bench.evaluation.isolation_check import Trap
+from main_bench.evaluation.process.isolation import Limits, PolicyProcess
+from main_bench.evaluation.process.isolation_check import Trap
+from main_bench.evaluation.process.sandbox import SANDBOX_ENV, SandboxSettings, sandbox_problem
 from main_bench.evaluation.records import TEAM
 from main_bench.evaluation.results import _read, load_results
-from main_bench.evaluation.sandbox import SANDBOX_ENV, SandboxSettings, sandbox_problem
 from main_bench.evaluation.submission import parse_spec
 
 POLICIES = Path(__file__).parent / "policies"
@@ -200,7 +200,7 @@ def test_no_bubblewrap_refuses_in_one_line_unless_no_sandbox(tiny_dataset, tmp_p
 
 def test_an_evaluation_hides_its_data_set_results_cache_and_scene_folders(tiny_dataset, tmp_path):
     from main_bench.episodes.dataset import read_manifest
-    from main_bench.evaluation.sandbox import evaluation_sandbox
+    from main_bench.evaluation.process.sandbox import evaluation_sandbox
     from main_bench.evaluation.settings import EvalSettings
 
     dataset, cache = tiny_dataset

@@ -9,7 +9,7 @@ import pyarrow.parquet as pq
 import trimesh
 
 from main_bench.episodes.manifest import read_manifest
-from main_bench.evaluation.task_rules import rules_json, sim_settings_from_manifest
+from main_bench.evaluation.scoring.task_rules import rules_json, sim_settings_from_manifest
 from main_bench.sim import synthetic
 
 

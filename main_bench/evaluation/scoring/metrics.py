@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..sim.task import deciding_agents, team_success
-from .records import TEAM
+from ...sim.task import deciding_agents, team_success
+from ..records import TEAM
 
 AGENT_METRICS = ("success", "spl", "soft_spl", "distance_to_goal", "path_length", "steps", "collisions")
 TEAM_METRICS = AGENT_METRICS

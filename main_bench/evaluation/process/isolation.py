@@ -1,6 +1,6 @@
 """Isolation: a submitted policy runs in its own process, with time and memory limits.
 
-`PolicyProcess` starts `python -m main_bench.evaluation.policy_child` (a fresh interpreter: the C-level fork is
+`PolicyProcess` starts `python -m main_bench.evaluation.process.policy_child` (a fresh interpreter: the C-level fork is
 followed at once by exec, as multiprocessing's "spawn" does, so no simulator or OpenGL state is shared), sends
 it only `EpisodeInfo` and observations, and waits for each answer with a deadline. Whatever goes wrong in the
 policy becomes a `PolicyError` whose `reason` starts with its kind:
@@ -28,11 +28,11 @@ import weakref
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import InputError, MainBenchError, SubmissionError
+from ...errors import InputError, MainBenchError, SubmissionError
+from ..submission import PolicySpec, ProtocolError
 from .ipc import encode_request, recv_reply, send_parts
 from .policy_child import EXIT_OUT_OF_MEMORY, TORCH_DEVICE_VAR
 from .sandbox import SandboxSettings, launch, popen, signal_of_exit
-from .submission import PolicySpec, ProtocolError
 
 #: The kinds a `PolicyError.reason` starts with.
 REASON_KINDS: tuple[str, ...] = ("exception", "timeout", "invalid_action", "invalid_message", "dead", "memory")
@@ -217,7 +217,7 @@ class PolicyProcess:
         extra_env = {name: str(self.limits.threads) for name in _THREAD_VARS}
         if self.limits.torch_device is not None:
             extra_env[TORCH_DEVICE_VAR] = self.limits.torch_device
-        command = [sys.executable, "-m", "main_bench.evaluation.policy_child", str(child.fileno())]
+        command = [sys.executable, "-m", "main_bench.evaluation.process.policy_child", str(child.fileno())]
         module = self.spec.target if self.spec.kind == "module" else None
         try:
             how = launch(command, self.spec.root, module, self.sandbox, self.limits.memory_mb, extra_env)

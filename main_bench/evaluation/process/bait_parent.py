@@ -1,4 +1,4 @@
-"""`check-agent`'s decoy parent: `python -m main_bench.evaluation.bait_parent evaluate --episodes E ... --out R
+"""`check-agent`'s decoy parent: `python -m main_bench.evaluation.process.bait_parent evaluate --episodes E ... --out R
 -- COMMAND...`.
 
 It looks, to the policy process it starts (COMMAND), like the evaluator: its command line names a data set and

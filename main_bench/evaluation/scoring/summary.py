@@ -18,10 +18,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .channel import communication_stats
+from ..channel import communication_stats
+from ..records import RESULTS_SCHEMA_VERSION, TEAM
 from .intervals import cluster_bootstrap_ci, interval_seed, wilson_interval
 from .metrics import AGENT_METRICS, TEAM_METRICS
-from .records import RESULTS_SCHEMA_VERSION, TEAM
 
 #: Failures listed one by one in summary.json (the rest are counted).
 MAX_LISTED_FAILURES = 200

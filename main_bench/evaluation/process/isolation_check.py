@@ -143,7 +143,7 @@ class Trap:
 
     def sandbox_for(self, base: SandboxSettings, spec: str) -> SandboxSettings:
         """`base` with the bait shown (the results folder writable) and the decoy parent in front."""
-        wrapper = (sys.executable, "-m", "main_bench.evaluation.bait_parent", "evaluate",
+        wrapper = (sys.executable, "-m", "main_bench.evaluation.process.bait_parent", "evaluate",
                    "--episodes", str(self.episodes), "--split", "val", "--agent", spec, "--out", str(self.results),
                    "--seed", "0", "--")
         binds = (*base.binds, Bind(str(self.episodes)), Bind(str(self.results), writable=True))

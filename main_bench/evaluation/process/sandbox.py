@@ -1,4 +1,4 @@
-"""The sandbox of a policy process: bubblewrap (`bwrap`) around `python -m main_bench.evaluation.policy_child`.
+"""The sandbox of a policy process: bubblewrap (`bwrap`) around `python -m main_bench.evaluation.process.policy_child`.
 
 In: the command of the policy process, the submission's folder, the paths it must never see (data set, results,
 caches, scenes) and its memory limit. Out: the command line, environment and argument pipe that start it inside
@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ...errors import InputError
 
 #: The whole environment of a sandboxed policy process (thread variables are added by `PolicyProcess`).
 SANDBOX_ENV: dict[str, str] = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp",
@@ -45,7 +45,7 @@ GPU_DEVICES: tuple[str, ...] = ("/dev/nvidiactl", "/dev/nvidia-uvm", "/dev/nvidi
                                 "/dev/dri")
 NO_SANDBOX_HINT = ("install bubblewrap (Debian/Ubuntu: apt-get install bubblewrap) and allow user namespaces, or "
                    "pass --no-sandbox to run the policy unsandboxed (recorded in the results)")
-PACKAGE_DIR = Path(__file__).resolve().parent.parent
+PACKAGE_DIR = Path(__file__).resolve().parents[2]
 #: bubblewrap version that limits a tmpfs's size (`--size`); older ones get an unlimited /tmp.
 SIZE_OPTION_SINCE = (0, 8, 0)
 
@@ -224,7 +224,7 @@ def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_
 def evaluation_sandbox(settings: Any, manifest: Any) -> SandboxSettings:
     """The sandbox of an evaluation (`EvalSettings`): on unless `--no-sandbox`, hiding the data set, the
     results folder, the cache of built-in houses and navmeshes, and the folders of the data set's scene files."""
-    from ..scenes.builtin import default_cache_dir
+    from ...scenes.builtin import default_cache_dir
 
     hidden = [settings.episodes, settings.out, settings.cache_dir or default_cache_dir()]
     hidden += [Path(e.path).parent for e in manifest.scenes.values() if getattr(e, "path", None)]

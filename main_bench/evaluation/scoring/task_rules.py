@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the simulator's modules are heavy; `describe_rules` is imported by the leaderboard
-    from ..sim.task import TaskRules
+    from ...sim.task import TaskRules
 
 
 def max_steps_of(manifest: Any) -> int:
@@ -24,7 +24,7 @@ def max_steps_of(manifest: Any) -> int:
 def found_tolerance(manifest: Any) -> float:
     """Geodesic distance (m) to a target's stored success region within which a `found` call is correct: one
     cell of the data set's navmesh (`episodes.goals.success_tolerance`)."""
-    from ..episodes.goals import success_tolerance
+    from ...episodes.goals import success_tolerance
 
     return success_tolerance(float(manifest.navmesh().cell_size))
 
@@ -32,7 +32,7 @@ def found_tolerance(manifest: Any) -> float:
 def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
     """`TaskRules` for `task`: distances are to the success regions the data set stores (the success distance is
     in the regions), so a call is correct within `found_tolerance`; the data set's max steps."""
-    from ..sim.task import TaskRules
+    from ...sim.task import TaskRules
 
     return TaskRules(task=task, success_distance=found_tolerance(manifest), max_steps=max_steps_of(manifest))
 
@@ -40,7 +40,7 @@ def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
 def sim_settings_from_manifest(manifest: Any, renderer: str, gpu: int | None = None) -> Any:
     """`SimSettings` with the data set's agent body (radius, height, max climb), actions and camera, and the
     chosen renderer (on EGL device `gpu`, None: the default display)."""
-    from ..sim.settings import CameraSettings, SimSettings
+    from ...sim.settings import CameraSettings, SimSettings
 
     gen = manifest.settings
     camera = CameraSettings(width=int(gen.camera_width), height=int(gen.camera_height),
