@@ -294,6 +294,7 @@ class MainParallelEnv(ParallelEnv):
         judge = self._judge
         info = {"episode_id": self._episode.episode_id, "task": self._episode.task,
                 "distance_to_goal": float(self._distances[i]), "collided": bool(self._collided[i]),
+                "in_success_region": bool(self._distances[i] <= judge.rules.success_distance),
                 "success": bool(judge.found_steps[i] >= 0 and judge.correct[i])}
         if over:
             info["team_success"] = bool(judge.success)

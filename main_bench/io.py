@@ -7,11 +7,13 @@ import hashlib
 import json
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from .errors import InputError
+
+T = TypeVar("T")
 
 
 def _process_umask() -> int:
@@ -122,3 +124,21 @@ def sha256_file(path: str | Path, chunk: int = 1 << 20) -> str:
         while block := fh.read(chunk):
             h.update(block)
     return h.hexdigest()
+
+
+def read_through_cache(entry: Path, read: Callable[[Path], T | None], make: Callable[[], T],
+                       write: Callable[[Path, T], None]) -> T:
+    """A value kept in a cache file: `read(entry)` when the file exists and reads back (None: missing, damaged
+    or foreign), else `make()`, stored with `write(entry, value)` (folders created; a cache that cannot be
+    written only costs speed)."""
+    if entry.is_file():
+        cached = read(entry)
+        if cached is not None:
+            return cached
+    value = make()
+    try:
+        entry.parent.mkdir(parents=True, exist_ok=True)
+        write(entry, value)
+    except OSError:
+        pass
+    return value

@@ -54,6 +54,8 @@ def run(
     threads: int = typer.Option(1, "--threads", help="torch CPU threads of the trainer."),
     found_penalty: float = typer.Option(0.0, "--found-penalty", help="Training-only shaping: subtracted from "
                                         "an agent's reward for a wrong `found` call."),
+    found_aux: float = typer.Option(0.0, "--found-aux", help="Training-only: weight of an auxiliary loss that "
+                                    "teaches p(found) where the agent stands in its success region (0: plain PPO)."),
     step_penalty: float = typer.Option(0.01, "--step-penalty", help="Reward: paid by every acting agent each step."),
     success_bonus: float = typer.Option(2.5, "--success-bonus", help="Reward: bonus of a success."),
     cache_dir: Path = typer.Option(None, "--cache-dir", help="Cache of built-in houses and navmeshes."),
@@ -74,7 +76,8 @@ def run(
         backend=backend, rollout=rollout, updates=updates, max_minutes=max_minutes,
         checkpoint_every=checkpoint_every, seed=seed, device=device, hidden=hidden, features=hidden,
         max_steps=max_steps or None, found_penalty=found_penalty, step_penalty=step_penalty, success_bonus=success_bonus,
-        cache_dir=None if cache_dir is None else str(cache_dir), ppo=PPOSettings(lr=lr, epochs=epochs, bptt=bptt))
+        cache_dir=None if cache_dir is None else str(cache_dir), ppo=PPOSettings(lr=lr, epochs=epochs, bptt=bptt,
+                                                                     found_aux=found_aux))
     command = "main-bench " + " ".join(shlex.quote(a) for a in sys.argv[1:])
 
     def show(line: str) -> None:

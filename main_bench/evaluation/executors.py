@@ -16,6 +16,7 @@ import traceback
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from ..worker_threads import single_threaded_children
 from .chunks import Chunk
 from .settings import EvalSettings
 from .worker import WorkerContext
@@ -38,6 +39,7 @@ def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any) -> 
     ctx = None
     try:
         ctx = WorkerContext(settings)
+        ctx.prepare()
         while True:
             results.put(("want", wid))
             chunk = jobs.get()
@@ -60,7 +62,8 @@ def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any) -> 
 
 class Blocks:
     """Hands out chunks to `n` workers: worker k works through the k-th contiguous block of the (scene-ordered)
-    chunks, so it stays on few scenes; an idle worker takes the last chunk of the block with most episodes left.
+    chunks, so it stays on few scenes; an idle worker takes the last chunk of the block with most episodes left
+    (it then computes that chunk's target fields again).
     Which worker runs a chunk changes no file."""
 
     def __init__(self, chunks: Sequence[Chunk], n: int) -> None:
@@ -80,59 +83,81 @@ class Blocks:
         return richest.pop() if richest else None
 
 
-def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage) -> None:
-    """Run the chunks on `workers` spawned processes (fresh interpreters: no simulator or GL state shared), each
-    working through its own contiguous block of `chunks` (see `Blocks`)."""
-    if workers <= 1 or len(chunks) <= 1:
-        run_inline(settings, chunks, on_message)
-        return
-    context = mp.get_context("spawn")
-    n = min(workers, len(chunks))
-    blocks = Blocks(chunks, n)
-    jobs = [context.Queue() for _ in range(n)]
-    results = context.Queue()
-    procs = [context.Process(target=_local_worker, args=(settings, k, jobs[k], results), daemon=False)
-             for k in range(n)]
-    for p in procs:
-        p.start()
-    done, exited = 0, 0
-    try:
+class LocalWorkers:
+    """`n` worker processes forked from a forkserver that has imported the worker's modules once (a clean
+    process: no simulator or GL state of this one is shared), started before the evaluation is planned so that their imports, numba kernel loading and policy start (`WorkerContext.prepare`)
+    overlap the parent's planning. `run` feeds them chunks once; `close` stops them."""
+
+    def __init__(self, settings: EvalSettings, n: int) -> None:
+        context = mp.get_context("forkserver")
+        context.set_forkserver_preload(["main_bench.evaluation.worker"])
+        self.n = n
+        self.jobs = [context.Queue() for _ in range(n)]
+        self.results = context.Queue()
+        self.procs = [context.Process(target=_local_worker, args=(settings, k, self.jobs[k], self.results),
+                                      daemon=False) for k in range(n)]
+        with single_threaded_children():
+            for p in self.procs:
+                p.start()
+
+    def run(self, chunks: Sequence[Chunk], on_message: OnMessage) -> None:
+        """Run every chunk, worker k working through the k-th contiguous block of `chunks` (see `Blocks`)."""
+        blocks = Blocks(chunks, self.n)
+        done, exited = 0, 0
         while done < len(chunks):
             try:
-                kind, value = results.get(timeout=1.0)
+                kind, value = self.results.get(timeout=1.0)
             except queue.Empty:
-                dead = [p for p in procs if not p.is_alive() and p.exitcode not in (0, None)]
-                if dead and results.empty():
+                dead = [p for p in self.procs if not p.is_alive() and p.exitcode not in (0, None)]
+                if dead and self.results.empty():
                     raise RuntimeError(f"a worker process died (exit code {dead[0].exitcode}); "
                                        "finished chunks are kept: run the same command again to resume") from None
                 continue
             if kind == "want":
-                jobs[value].put(blocks.next(value))
+                self.jobs[value].put(blocks.next(value))
                 continue
             if kind == "error":
                 raise pickle.loads(value)
             if kind == "exit":
                 exited += 1
-                if exited == n and done < len(chunks):
+                if exited == self.n and done < len(chunks):
                     raise RuntimeError("workers exited before finishing every chunk; run again to resume")
                 continue
             if kind == "chunk":
                 done += 1
             on_message(kind, value)
-        for q in jobs:  # every chunk is done: let the workers close their simulators and policy processes
+        for q in self.jobs:  # every chunk is done: let the workers close their simulators and policy processes
             q.put(None)
-        for p in procs:
+        for p in self.procs:
             p.join(timeout=30)
-    finally:
-        for p in procs:
+
+    def close(self) -> None:
+        """Stop the workers still running (after `run`, they have exited) and release the queues."""
+        for p in self.procs:
             if p.is_alive():
                 p.terminate()
-        for p in procs:
+        for p in self.procs:
             p.join(timeout=10)
-        for q in (*jobs, results):
+        for q in (*self.jobs, self.results):
             with contextlib.suppress(Exception):
                 q.close()
                 q.cancel_join_thread()
+
+
+def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage,
+              pool: LocalWorkers | None = None) -> None:
+    """Run the chunks on `workers` local worker processes (`pool` when already started), or in this process
+    for one worker or one chunk."""
+    if workers <= 1 or len(chunks) <= 1:
+        run_inline(settings, chunks, on_message)
+        return
+    own = pool is None
+    pool = pool or LocalWorkers(settings, min(workers, len(chunks)))
+    try:
+        pool.run(chunks, on_message)
+    finally:
+        if own:
+            pool.close()
 
 
 def run_ray(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage) -> None:

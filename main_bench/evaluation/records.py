@@ -10,7 +10,12 @@ them as missing, which readers take as zero.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ..io import atomic_path
 
 #: Version of the records, trajectories and summary.json; readers refuse a newer one. 2: summary.json carries
 #: `files` (SHA-256 of every part) and settings.sandbox; 3: distances to success regions, intervals resampling
@@ -56,3 +61,18 @@ TRAJECTORY_SCHEMA = pa.schema(
     ],
     metadata={"main_bench_schema_version": str(RESULTS_SCHEMA_VERSION)},
 )
+
+
+def partition_dir(root: Path, kind: str, split: str, task: str, agents: int) -> Path:
+    """`root/<kind>/split=<split>/task=<task>/agents=<agents>`; kind is `records` or `trajectories`."""
+    return Path(root) / kind / f"split={split}" / f"task={task}" / f"agents={agents}"
+
+
+def write_part(root: Path, kind: str, split: str, task: str, agents: int, part: int, table: pa.Table) -> Path:
+    """Write one part file atomically (zstd) and return its path; `table` must match the kind's schema."""
+    schema = RECORD_SCHEMA if kind == "records" else TRAJECTORY_SCHEMA
+    table = table.cast(schema)
+    path = partition_dir(root, kind, split, task, agents) / f"part-{part:05d}.parquet"
+    with atomic_path(path, suffix=".parquet") as tmp:
+        pq.write_table(table, tmp, compression="zstd", row_group_size=50_000)
+    return path

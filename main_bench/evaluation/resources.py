@@ -44,11 +44,11 @@ class EpisodeResources:
         """(Scene, NavMesh) of `scene_id`: the navmesh is the one stored in the data set (`load_navmesh`)."""
         if scene_id not in self._scenes:
             from ..episodes.dataset import load_navmesh, resolve_scene
-            from ..scenes.loader import load_scene
+            from ..scenes.cache import load_scene_geometry
 
             entry = self.manifest.scenes.get(scene_id)
             path = resolve_scene(self.manifest, scene_id, self.cache_dir)
-            scene = load_scene(path, up=getattr(entry, "up", "auto") or "auto")
+            scene = load_scene_geometry(path, up=getattr(entry, "up", "auto") or "auto")
             self._scenes[scene_id] = (scene, load_navmesh(self.manifest, scene_id))
         return self._scenes[scene_id]
 

@@ -15,31 +15,15 @@ from typing import Any
 import pandas as pd
 import pyarrow as pa
 import pyarrow.dataset as pads
-import pyarrow.parquet as pq
 
 from ..errors import ResultsError
-from ..io import atomic_path, check_schema_version, read_json
+from ..io import check_schema_version, read_json
 from ..parquet_read import read_parquet
 from .ledger import verify_results
-from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
+from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA, partition_dir, write_part  # noqa: F401
 
 PARTITION_SCHEMA = pa.schema([pa.field("split", pa.string()), pa.field("task", pa.string()),
                               pa.field("agents", pa.int8())])
-
-
-def partition_dir(root: Path, kind: str, split: str, task: str, agents: int) -> Path:
-    """`root/<kind>/split=<split>/task=<task>/agents=<agents>`; kind is `records` or `trajectories`."""
-    return Path(root) / kind / f"split={split}" / f"task={task}" / f"agents={agents}"
-
-
-def write_part(root: Path, kind: str, split: str, task: str, agents: int, part: int, table: pa.Table) -> Path:
-    """Write one part file atomically (zstd) and return its path; `table` must match the kind's schema."""
-    schema = RECORD_SCHEMA if kind == "records" else TRAJECTORY_SCHEMA
-    table = table.cast(schema)
-    path = partition_dir(root, kind, split, task, agents) / f"part-{part:05d}.parquet"
-    with atomic_path(path, suffix=".parquet") as tmp:
-        pq.write_table(table, tmp, compression="zstd", row_group_size=50_000)
-    return path
 
 
 def _read(root: Path, kind: str, filter_expr=None, files: list[Path] | None = None) -> pd.DataFrame:

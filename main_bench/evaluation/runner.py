@@ -20,8 +20,6 @@ from ..io import atomic_write_json, read_json
 from .baselines import privileged_baseline
 from .chunks import Chunk, make_chunks
 from .ledger import verified_files
-from .results import _read
-from .scoring.summary import build_summary
 from .scoring.task_rules import rules_json
 from .settings import EvalSettings, SubmissionMeta
 
@@ -154,6 +152,19 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
         parse_spec(settings.agent)  # a malformed spec fails now, before any file is written
         if settings.sandbox:
             require_sandbox()
+    pool = None
+    if settings.executor == "local" and settings.workers > 1:
+        from .executors import LocalWorkers
+
+        pool = LocalWorkers(settings, settings.workers)  # they start up while this process plans
+    try:
+        return _evaluate(settings, progress, pool, t0)
+    finally:
+        if pool is not None:
+            pool.close()
+
+
+def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float) -> EvaluationOutcome:
     manifest, chunks = plan(settings)
     meta = submission_meta(settings)
     settings = replace(settings, submission=meta)
@@ -184,7 +195,7 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
         if settings.executor == "ray":
             executors.run_ray(settings, pending, settings.workers, on_message)
         else:
-            executors.run_local(settings, pending, settings.workers, on_message)
+            executors.run_local(settings, pending, settings.workers, on_message, pool)
     summary = write_summary(settings, manifest, chunks)
     return EvaluationOutcome(out=out, summary=summary, chunks_run=len(pending), chunks_skipped=skipped,
                              episodes_run=counters["episodes"], agent_steps=counters["steps"],
@@ -194,6 +205,9 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
 def write_summary(settings: EvalSettings, manifest: Any, chunks: list[Chunk]) -> dict[str, Any]:
     """Compute `summary.json` from the records of `chunks` and write it atomically; returns it."""
     out = Path(settings.out)
+    from .results import _read
+    from .scoring.summary import build_summary
+
     files = verified_files(out, chunks)
     records = _read(out, "records", files=[out / rel for rel in files])
     keys = {(c.split, c.task, c.agents) for c in chunks}

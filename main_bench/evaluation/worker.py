@@ -23,9 +23,8 @@ from . import ledger
 from .baselines import privileged_baseline
 from .chunks import Chunk
 from .episode_loop import EpisodeFailure, LoopSettings, run_episode
-from .records import RECORD_SCHEMA, TRAJECTORY_SCHEMA
+from .records import RECORD_SCHEMA, TRAJECTORY_SCHEMA, write_part
 from .resources import EpisodeResources
-from .results import write_part
 from .scoring.metrics import EpisodeTrace, episode_metrics
 from .scoring.task_rules import rules_from_manifest, sim_settings_from_manifest
 from .settings import EvalSettings
@@ -121,6 +120,22 @@ class WorkerContext:
         except KeyError:
             raise DatasetError(f"episode {episode_id!r} is not in the data set any more; was it regenerated "
                                "under this results directory? Use a new --out", path=self.settings.episodes) from None
+
+    def prepare(self) -> None:
+        """Load, before the first chunk arrives, what every chunk needs: the policy (its process started for a
+        submission) and numba's compiled navmesh kernels (from their on-disk cache), by one distance field and
+        path on the data set's first navmesh. Caches nothing that a chunk reads, so results do not change."""
+        self._policy_for()
+        if not self.manifest.scenes:
+            return
+        from ..episodes.dataset import load_navmesh
+
+        navmesh = load_navmesh(self.manifest, min(self.manifest.scenes))
+        cells = np.asarray(navmesh.cells(), dtype=np.float64)
+        if len(cells) >= 2:
+            field = navmesh.distance_field(cells[:1])
+            field.path(cells[-1])
+            navmesh.snap(cells[-1:])
 
     # -- work ---------------------------------------------------------------------------------------------------
 

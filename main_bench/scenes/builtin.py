@@ -16,7 +16,7 @@ from typing import Any
 from ..errors import InputError
 from ..io import check_schema_version, read_json
 from .objects import sidecar_path
-from .procedural import GENERATOR_VERSION, generate_house, write_house
+from .procedural import GENERATOR_VERSION
 
 SPLIT_SCHEMA_VERSION = 1
 _HOUSE_ID = re.compile(r"^house_(\d{4,})$")
@@ -171,6 +171,8 @@ def ensure_builtin_scenes(scene_ids: Iterable[str], cache_dir: str | Path) -> di
         seed = seed_of(scene_id)
         glb = folder / f"{scene_id}.glb"
         if not _is_current(glb):
+            from .procedural import generate_house, write_house
+
             written = write_house(generate_house(seed), folder)
             if written != glb:  # house_7 and house_0007 name the same seed; keep the caller's id
                 raise InputError(f"built-in house id {scene_id!r} should be written {written.stem!r}")

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import atomic_path
+from ..io import atomic_path, read_through_cache
 from .loader import Scene, UpAxis, load_scene, scene_content_hash
 from .objects import SemanticObject
 
@@ -61,17 +61,7 @@ def load_scene_geometry(path: str | Path, *, up: UpAxis = "auto", scale: float |
         return load_scene(path, up=up, scale=scale)  # its one-line error
     folder = Path(cache_dir) if cache_dir is not None else default_scene_cache_dir()
     entry = folder / f"{path.stem}-{scene_cache_key(path, up, scale)[:24]}.npz"
-    if entry.is_file():
-        cached = _read(entry, path)
-        if cached is not None:
-            return cached
-    scene = load_scene(path, up=up, scale=scale)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        _write(entry, scene)
-    except OSError:
-        pass  # a read-only cache only costs speed
-    return scene
+    return read_through_cache(entry, lambda e: _read(e, path), lambda: load_scene(path, up=up, scale=scale), _write)
 
 
 def _write(entry: Path, scene: Scene) -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 from ..io import atomic_path, atomic_write_text
 
 CURVE_COLUMNS = ("update", "agent_steps", "episodes", "wall_seconds", "steps_per_second", "reward", "success",
-                 "team_success", "spl", "episode_length", "policy_loss", "value_loss", "entropy", "approx_kl")
+                 "team_success", "spl", "episode_length", "policy_loss", "value_loss", "entropy", "approx_kl", "found_loss")
 
 
 def write_curve(run_dir: Path, rows: list[dict[str, float]]) -> None:

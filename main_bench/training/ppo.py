@@ -1,5 +1,7 @@
 """The PPO update: clipped surrogate, value loss and entropy, masked to the steps where an agent was alive,
-over sequences of at most `bptt` steps started from the stored GRU memories (truncated BPTT).
+over sequences of at most `bptt` steps started from the stored GRU memories (truncated BPTT); optionally an
+auxiliary `found` loss (`PPOSettings.found_aux`) that teaches the stop decision from the env's success-region
+signal, because PPO alone rarely samples a correct `found` before it has learned to avoid calling it at all.
 
 Flows in: a filled `storage.Rollout`, its advantages and returns (`gae.gae`). Flows out: the optimiser step's
 mean losses. Minibatches hold whole sub-environments (every agent of a team together: MAPPO's critic needs them).
@@ -27,6 +29,9 @@ class PPOSettings:
     value_coef: float = 0.5
     entropy_coef: float = 0.01
     max_grad_norm: float = 0.5
+    #: Weight of the training-only auxiliary `found` loss (0: plain PPO, the paper's): binary cross-entropy
+    #: between the policy's probability of `found` and whether the agent stands in its success region.
+    found_aux: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict."""
@@ -75,7 +80,8 @@ def ppo_update(net: Any, optimizer: Any, data: dict[str, np.ndarray], advantages
     steps, envs = alive.shape[:2]
     chunks = [slice(s, min(s + settings.bptt, steps)) for s in range(0, steps, settings.bptt)]
     groups = max(1, min(settings.minibatches, envs))
-    totals: dict[str, float] = {"policy_loss": 0.0, "value_loss": 0.0, "entropy": 0.0, "approx_kl": 0.0}
+    totals: dict[str, float] = {"policy_loss": 0.0, "value_loss": 0.0, "entropy": 0.0, "approx_kl": 0.0,
+                                "found_loss": 0.0}
     count = 0
     for _ in range(settings.epochs):
         order = rng.permutation(envs)
@@ -99,6 +105,9 @@ def ppo_update(net: Any, optimizer: Any, data: dict[str, np.ndarray], advantages
                 value_loss = 0.5 * (((values - tensor(returns)) ** 2) * mask).sum() / total
                 entropy = (dist.entropy() * mask).sum() / total
                 loss = policy_loss + settings.value_coef * value_loss - settings.entropy_coef * entropy
+                found_loss = found_bce(logits, tensor(data["in_region"]).float(), mask, total)
+                if settings.found_aux > 0:
+                    loss = loss + settings.found_aux * found_loss
                 optimizer.zero_grad()
                 loss.backward()
                 torch.nn.utils.clip_grad_norm_(net.parameters(), settings.max_grad_norm)
@@ -106,7 +115,19 @@ def ppo_update(net: Any, optimizer: Any, data: dict[str, np.ndarray], advantages
                 with torch.no_grad():
                     kl = (((ratio - 1) - torch.log(ratio)) * mask).sum() / total
                 for key, value in (("policy_loss", policy_loss), ("value_loss", value_loss), ("entropy", entropy),
-                                   ("approx_kl", kl)):
+                                   ("approx_kl", kl), ("found_loss", found_loss)):
                     totals[key] += float(value.detach())
                 count += 1
     return {k: v / max(count, 1) for k, v in totals.items()}
+
+
+def found_bce(logits: Any, in_region: Any, mask: Any, total: Any) -> Any:
+    """Mean over alive steps of the binary cross-entropy between p(`found`) (action 0 of `logits` (..., 4)) and
+    `in_region` (1.0 where the agent stood in its success region, so that a `found` would be correct)."""
+    import torch
+
+    log_p = torch.log_softmax(logits, dim=-1)
+    log_found = log_p[..., 0]
+    log_not = torch.logsumexp(log_p[..., 1:], dim=-1)
+    bce = -(in_region * log_found + (1.0 - in_region) * log_not)
+    return (bce * mask).sum() / total

@@ -1,7 +1,8 @@
 """Rollout storage: T steps of a (B, N) block of agents, with the GRU memories the policy started each step from.
 
 Flows in: the sampler's packed observations (depth kept as uint16 millimetres, RGB as uint8), the inbox, the
-actions, their log-probabilities, values, rewards, done/alive/first masks. Flows out: advantages and returns
+actions, their log-probabilities, values, rewards, done/alive/first masks, and whether each agent stood in its
+success region (for the optional auxiliary `found` loss). Flows out: advantages and returns
 (`gae.py`) and sequences of length L for truncated backpropagation through time (`chunks`).
 """
 
@@ -44,6 +45,7 @@ class StorageShape:
             "done": ((t, b, n), np.dtype(np.bool_)),
             "alive": ((t, b, n), np.dtype(np.bool_)),
             "first": ((t, b, n), np.dtype(np.bool_)),
+            "in_region": ((t, b, n), np.dtype(np.bool_)),
         }
         if self.use_rgb:
             out["rgb"] = ((t, b, n, s, s, 3), np.dtype(np.uint8))
@@ -68,6 +70,7 @@ class Rollout:
                 self.data[key][t] = arrays[key]
         self.data["alive"][t] = arrays["alive"]
         self.data["first"][t] = arrays["first"]
+        self.data["in_region"][t] = arrays["in_region"]
 
     def put_step(self, t: int, hidden: np.ndarray, actions: np.ndarray, logp: np.ndarray, values: np.ndarray,
                  rewards: np.ndarray, done: np.ndarray) -> None:

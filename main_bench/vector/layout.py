@@ -4,7 +4,8 @@ Flows: the trainer writes `actions` (B, N) and `messages` (B, N, F) and the sub-
 else, after every lock-step: the agents' packed observations (`depth` uint16 millimetres, `rgb` uint8 when used,
 `vec` the goal vector of `training.model.goal_vector`, the `inbox`), per agent `reward`, `done` (its episode
 ended on this step, or it had already left), `alive` (it acts on the next step), `first` (the observation
-starts an episode), and per sub-environment numeric episode statistics written on the step that ended it
+starts an episode), `in_region` (the agent stands in its target's success region: a `found` now would be
+correct; the env's `in_success_region` info, for training-only auxiliary losses), and per sub-environment numeric episode statistics written on the step that ended it
 (`ep_end` 1.0, team success, mean agent success, mean agent SPL, team return, length in steps).
 """
 
@@ -65,6 +66,7 @@ def layout(spec: VecSpec) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
         "alive": ((b, n), np.dtype(np.bool_)),
         "first": ((b, n), np.dtype(np.bool_)),
         "success": ((b, n), np.dtype(np.bool_)),
+        "in_region": ((b, n), np.dtype(np.bool_)),
         "stats": ((b, len(EPISODE_STATS)), np.dtype(np.float64)),
         "actions": ((b, n), np.dtype(np.int64)),
         "messages": ((b, n, f), np.dtype(np.float32)),

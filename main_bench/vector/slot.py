@@ -43,6 +43,7 @@ class SubEnv:
         self._last_pos = np.array(self.env._sim.positions, dtype=np.float64)  # noqa: SLF001
         self._success = np.zeros(n, dtype=bool)
         self._write_obs(arrays, observations)
+        arrays["in_region"][self.b] = [bool(infos[a].get("in_success_region", False)) for a in self.ids]
         arrays["alive"][self.b] = True
         arrays["first"][self.b] = True
 
@@ -82,6 +83,8 @@ class SubEnv:
             alive = np.array([a in env.agents for a in self.ids])
             self._write_obs(arrays, {a: observations[a] for a in env.agents})
             arrays["alive"][b] = alive
+            arrays["in_region"][b] = [a in env.agents and bool(infos[a].get("in_success_region", False))
+                                      for a in self.ids]
             arrays["first"][b] = False
             return
         team = next((bool(infos[a]["team_success"]) for a in live if "team_success" in infos[a]), False)

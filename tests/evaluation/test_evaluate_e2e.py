@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 
 from main_bench.episodes.dataset import load_episodes
-from main_bench.errors import PolicyFailure
+from main_bench.errors import DatasetError, PolicyFailure
 from main_bench.evaluation.records import TEAM
 from main_bench.evaluation.results import _read, load_results
 from main_bench.evaluation.runner import evaluate
@@ -257,3 +257,32 @@ def test_ray_executor_gives_the_same_files(reference, tiny_dataset, tmp_path):
     assert outcome.chunks_run == 4 and outcome.episodes_run == 8
     for kind in ("records", "trajectories"):
         pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
+
+
+def test_workers_started_before_planning_stop_on_bad_input(tiny_dataset, tmp_path):
+    """The local workers start before the evaluation is planned; a split the data set lacks is still refused
+    with the planner's own error, nothing is written, and no worker process is left behind."""
+    import multiprocessing
+
+    out = tmp_path / "refused"
+    with pytest.raises(DatasetError, match="no episodes in split 'nope'"):
+        evaluate(_settings(tiny_dataset, out, workers=2, split="nope"))
+    assert not out.exists()
+    assert multiprocessing.active_children() == []
+
+
+def test_a_started_pool_runs_the_chunks_it_is_given(reference, tiny_dataset, tmp_path):
+    from main_bench.evaluation.executors import LocalWorkers
+    from main_bench.evaluation.runner import plan
+
+    out = tmp_path / "pool"
+    settings = _settings(tiny_dataset, out, workers=3)
+    pool = LocalWorkers(settings, 3)
+    try:
+        _, chunks = plan(settings)
+        seen: list[str] = []
+        pool.run(chunks[:2], lambda kind, value: seen.append(kind))  # fewer chunks than workers
+    finally:
+        pool.close()
+    assert seen.count("chunk") == 2 and all(not p.is_alive() for p in pool.procs)
+    assert all(c.finished(out) for c in chunks[:2]) and not any(c.finished(out) for c in chunks[2:])

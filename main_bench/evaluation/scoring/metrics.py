@@ -21,13 +21,15 @@ l = 0 < p; the progress `1 - d / l` is 1 when l = 0 and d = 0, else 0 when l = 0
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from ...sim.task import deciding_agents, team_success
 from ..records import TEAM
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 AGENT_METRICS = ("success", "spl", "soft_spl", "distance_to_goal", "path_length", "steps", "collisions")
 TEAM_METRICS = AGENT_METRICS

@@ -10,9 +10,8 @@ from .model import Box, Door, Floor, Furniture, House, Rect, Room
 from .placement import furnish_room
 from .stairs import StairPlan, plan_stairs
 from .structure import ceiling, exterior_walls, interior_walls, slab
+from .version import GENERATOR_VERSION
 
-#: Changes whenever the same seed would give a different house; cached houses of another version are remade.
-GENERATOR_VERSION = "1.2.0"
 #: Mixed with the user's seed so that the houses' random stream is their own.
 _STREAM_ID = 0x686F757365  # "house"
 #: One house in each block of this many consecutive seeds has two floors.

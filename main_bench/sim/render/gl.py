@@ -29,9 +29,10 @@ import numpy as np
 
 from ...scenes.loader import Scene
 from ..settings import CameraSettings
+from .baked import baked_surfaces
 from .camera import NEAR_M, far_plane, focal_scales, view_axes
 from .culling import CellCuller
-from .materials import TEXTURE_SIZE, agent_colors, face_normals, scene_surfaces
+from .materials import TEXTURE_SIZE, agent_colors, face_normals
 from .viewports import VIEWPORT_INDEX_EXTENSIONS, viewport_array_setter, viewport_index_extension
 
 #: Direction of the baked light (canonical frame); surfaces facing it or away from it are brightest.
@@ -361,7 +362,7 @@ class GLRenderer:
             prog["u_focal"].value = focal_scales(camera)
             prog["u_inv_max_depth"].value = 1.0 / camera.max_depth
         self._progs = progs
-        surf = scene_surfaces(scene)
+        surf = baked_surfaces(scene)
         shade = baked_shade(face_normals(surf.corners))
         lit = surf.colors.astype(np.float32)
         lit[:, :, :3] *= shade[:, None, None]

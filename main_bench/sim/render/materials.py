@@ -8,12 +8,15 @@ their UVs and image so a backend can sample it (`gl`) or average it per face (`t
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 from PIL import Image
 
 from ...scenes.loader import Scene
+
+if TYPE_CHECKING:
+    import trimesh
 
 #: Colour of surfaces that carry no colour at all (light grey).
 DEFAULT_RGBA = np.array([200, 200, 200, 255], dtype=np.uint8)
@@ -67,6 +70,8 @@ def _rgba(color: object) -> np.ndarray:
 
 
 def _material_color_and_image(material: object) -> tuple[np.ndarray, Image.Image | None]:
+    import trimesh
+
     if isinstance(material, trimesh.visual.material.PBRMaterial):
         color = DEFAULT_RGBA if material.baseColorFactor is None else _rgba(material.baseColorFactor)
         return color, material.baseColorTexture
@@ -85,6 +90,8 @@ def _texture_array(image: Image.Image) -> np.ndarray:
 
 def scene_surfaces(scene: Scene) -> Surfaces:
     """Flatten the scene's parts into one triangle soup with colours, UVs and texture layers."""
+    if scene.meshes:
+        import trimesh  # here: a scene read from the cache has no parts and needs no trimesh
     corners, colors, uvs, layers, closed = [], [], [], [], []
     textures: list[np.ndarray] = []
     image_ids: dict[int, int] = {}
@@ -135,6 +142,8 @@ def closed_outward(mesh: trimesh.Trimesh) -> np.ndarray:
     out = np.zeros(len(faces), dtype=bool)
     if len(faces) == 0 or not (mesh.is_watertight and mesh.is_winding_consistent):
         return out
+    import trimesh
+
     labels = trimesh.graph.connected_component_labels(mesh.face_adjacency, node_count=len(faces))
     tri = np.asarray(mesh.vertices, dtype=np.float64)[faces]
     signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0

@@ -15,8 +15,9 @@ import numpy as np
 from ...scenes.loader import Scene
 from ..quiet_pybullet import pb
 from ..settings import CameraSettings
+from .baked import baked_surfaces
 from .camera import NEAR_M, far_plane, view_axes
-from .materials import agent_colors, face_normals, scene_surfaces
+from .materials import agent_colors, face_normals
 
 #: Most colour groups (visual shapes) made from a scene; colours are quantised more coarsely until they fit.
 MAX_COLOR_GROUPS = 256
@@ -54,7 +55,7 @@ class TinyRenderer:
         self._client = pb.connect(pb.DIRECT)
         self._radius, self._height = agent_radius, agent_height
         self._agents: list[int] = []
-        surf = scene_surfaces(scene)
+        surf = baked_surfaces(scene)
         labels, palette = _color_groups(surf.face_colors())
         # TinyRenderer draws front faces only: open parts get a reversed copy of each face, so that they are
         # seen from both sides as in `gl` (closed outward-wound parts are never seen from behind anyway).
