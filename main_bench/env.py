@@ -19,6 +19,11 @@ its own `found` call is correct (individual targets), or, shared target, to ever
 the team succeeded. An agent is *terminated* when it called `found` or the episode ended on a call, and
 *truncated* when it ran out of steps; it then leaves `agents` (it stays in the scene as an obstacle).
 
+Infos per agent: `episode_id`, `task`, `distance_to_goal` (geodesic metres to its target's success region),
+`collided`, `success` (its correct `found`), `in_success_region` (it stands where a `found` would be correct:
+a training signal, e.g. for `train run --found-aux`; the evaluator never shows it to a policy), and
+`team_success` on the step that ends the episode.
+
 Each `reset` draws an episode from the env's generator (seeded by `reset(seed=...)`), or plays
 `options={"episode_id": ...}`.
 

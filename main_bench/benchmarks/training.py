@@ -6,7 +6,8 @@ and the memory of a rollout.
   (the same B sub-environments' `SubEnv` code stepped one after another in this process: no workers, no shared
   memory), measured side by side, interleaved per repeat; B = 1, 2, 4, 8; goal at B = 4: at least 85%.
   Random moves (no `found`), so episodes run their course.
-- Training (64 x 64 depth, 2 agents, IPPO, the small model, B = 4, 64-step rollouts, 2 PPO epochs):
+- Training (64 x 64 depth, 2 agents, IPPO, the small model, B = 8, 64-step rollouts, 2 PPO epochs, the
+  trainer's torch on 2 threads: the shipped run's settings):
   agent-steps/s of `Trainer`'s loop (sampling, forward, updates; not start-up) with the process sampler
   (goal: 500), and the time split of a second run with the in-process sampler whose simulators are
   timed: render (`observe`), physics (`step`), the rest of the env (rules, distances, packing), policy
@@ -31,6 +32,10 @@ from .modes import sample_dataset
 GOAL_SAMPLING_RATIO = 0.85
 GOAL_TRAINING_RATE = 500.0
 
+
+#: The training measurement's configuration: the shipped IPPO run's (B = 8, the trainer on both cores).
+TRAIN_ENVS = 8
+TRAIN_THREADS = 2
 
 def _spec(envs: int, use_rgb: bool = True) -> Any:
     from ..vector.layout import VecSpec
@@ -98,17 +103,18 @@ class _Timed:
         return getattr(self._sim, name)
 
 
-def training(updates: int, workdir: Path) -> dict[str, Any]:
-    """Trainer throughput (process sampler) and its time split (in-process sampler, timed simulators)."""
+def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int = TRAIN_THREADS) -> dict[str, Any]:
+    """Trainer throughput (process sampler) and its time split (in-process sampler, timed simulators), with
+    `envs` sub-environments and `threads` torch threads in the trainer."""
     import torch
 
     from ..training.ppo import PPOSettings
     from ..training.settings import TrainSettings
     from ..training.trainer import Trainer
 
-    torch.set_num_threads(1)
+    torch.set_num_threads(threads)
     base = dict(episodes=str(sample_dataset()), algo="ippo", goal="object", track="gps", image_size=64,
-                num_envs=4, rollout=64, updates=updates, checkpoint_every=10_000, ppo=PPOSettings(epochs=2))
+                num_envs=envs, rollout=64, updates=updates, checkpoint_every=10_000, ppo=PPOSettings(epochs=2))
     fast = Trainer(TrainSettings(**base, backend="process", workers=2), workdir / "process").run()
     rate = fast.agent_steps / sum(fast.timing.values())  # the training loop: sampling, forward, updates
 
@@ -145,6 +151,7 @@ def training(updates: int, workdir: Path) -> dict[str, Any]:
     loop = sum(seconds.values())
     seconds["startup_and_writing"] = total - loop
     return {"agent_steps_per_s": round(rate, 1), "agent_steps": fast.agent_steps, "updates": updates,
+            "envs": envs, "torch_threads": threads,
             "inline_agent_steps_per_s": round(split.agent_steps / loop, 1),
             "time_split_seconds": {k: round(v, 2) for k, v in seconds.items()},
             "time_split_share_of_loop": {k: round(v / loop, 3) for k, v in seconds.items()

@@ -12,6 +12,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
 from ..errors import InputError, MainBenchError
+from ..worker_threads import single_threaded_children
 
 Unit = Callable[[dict[str, Any]], list[dict[str, Any]]]
 
@@ -36,7 +37,7 @@ def run_units(fn: Unit, specs: list[dict[str, Any]], *, executor: str = "local",
 def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick: Callable[[int], None]) -> list:
     results: list[Any] = [None] * len(specs)
     ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(workers, len(specs)), mp_context=ctx) as pool:
+    with single_threaded_children(), ProcessPoolExecutor(max_workers=min(workers, len(specs)), mp_context=ctx) as pool:
         futures = {pool.submit(fn, spec): i for i, spec in enumerate(specs)}
         pending = set(futures)
         while pending:

@@ -1,8 +1,8 @@
 """Fixed chunks of episodes: the unit of work, of part files and of resumption.
 
 Episodes of each track (`split/task/agents`), all of them or the `--limit` sample (`subset.py`, stratified by
-scene), are sorted by id and split into chunks of
-`chunk_size`; chunk k of a track writes `part-k` of its records and trajectories. The chunks do not depend on
+scene), are ordered by (scene, id) and cut into chunks of at most `chunk_size` episodes of one scene
+(`CHUNKING` 2; version 1 cut the id order regardless of scenes); chunk k of a track writes `part-k` of its records and trajectories. The chunks do not depend on
 `--workers` or the executor, so neither do the files. A chunk is finished when its ledger entry exists (written
 atomically after its trajectories and records parts, with their hashes: `ledger.py`); a restarted run skips
 finished chunks, so rows are never duplicated.
@@ -48,9 +48,15 @@ class Chunk:
 def make_chunks(split: str, task: str, agents: int, episode_ids: list[str], chunk_size: int,
                 limit: int | None, scenes: list[str] | None = None, seed: int = 0) -> list[Chunk]:
     """The chunks of one track: all ids, or the `limit` sample stratified by `scenes` (the scene of each id;
-    default: the id's scene prefix), sorted and cut into runs of `chunk_size`."""
+    default: the id's scene prefix), ordered by (scene, id) and cut into runs of at most `chunk_size` that never
+    span two scenes (a chunk's worker then loads one scene and computes only that scene's target fields)."""
     if scenes is None:
         scenes = [str(i).rsplit("/", 3)[0] for i in episode_ids]
+    scene_of = dict(zip(episode_ids, scenes, strict=True))
     ids = stratified_sample(list(episode_ids), list(scenes), limit, seed, f"{split}/{task}/{int(agents)}")
-    return [Chunk(split, task, int(agents), k, tuple(ids[s:s + chunk_size]))
-            for k, s in enumerate(range(0, len(ids), chunk_size))]
+    runs: list[list[str]] = []
+    for episode_id in sorted(ids, key=lambda i: (scene_of[i], i)):
+        if not runs or len(runs[-1]) == chunk_size or scene_of[runs[-1][0]] != scene_of[episode_id]:
+            runs.append([])
+        runs[-1].append(episode_id)
+    return [Chunk(split, task, int(agents), k, tuple(run)) for k, run in enumerate(runs)]

@@ -14,6 +14,10 @@ from typing import Any
 from ..errors import InputError
 from .protocol import DEFAULT_MESSAGE_FLOATS, MODES, TRACKS
 
+#: Version of the rule that cuts a track into chunks (`chunks.make_chunks`): part of a run's identity, so a
+#: results directory made under another rule is never resumed with this one.
+CHUNKING = 2
+
 EXECUTORS = ("local", "ray")
 #: The largest `message_floats` a data set or track may set (the longest message a policy process describes).
 MAX_MESSAGE_FLOATS = 4096
@@ -131,6 +135,7 @@ class EvalSettings:
             "seed": self.seed,
             "track": self.track,
             "chunk_size": self.chunk_size,
+            "chunking": CHUNKING,
             "renderer": self.renderer,
             "sandbox": self.sandbox,
             "mode": self.mode,

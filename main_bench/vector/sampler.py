@@ -21,6 +21,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..errors import InputError
+from ..worker_threads import single_threaded_children
 from .layout import VecSpec, allocate, layout
 from .slot import SubEnv
 
@@ -125,7 +126,8 @@ class ProcessSampler:
         for rows in split_rows(spec.num_envs, workers):
             parent, child = ctx.Pipe()
             proc = ctx.Process(target=_worker, args=(child, spec, rows, names), daemon=True)
-            proc.start()
+            with single_threaded_children():
+                proc.start()
             child.close()
             self._conns.append(parent)
             self._procs.append(proc)

@@ -7,7 +7,7 @@ from main_bench.evaluation.executors import Blocks
 
 
 def _chunks(n_ids: int, size: int):
-    return make_chunks("val", "shared", 2, [f"e{i:03d}" for i in range(n_ids)], size, None)
+    return make_chunks("val", "shared", 2, [f"e{i:03d}" for i in range(n_ids)], size, None, ["s"] * n_ids)
 
 
 def test_every_chunk_once_and_blocks_contiguous():
@@ -30,3 +30,20 @@ def test_idle_worker_takes_from_the_fullest_block():
     assert handed[4].part == 7  # the last chunk of block 1 (the fullest, tied with block 2, comes first)
     assert sorted(c.part for c in handed) == list(range(12))
     assert blocks.next(2) is None
+
+
+def test_chunks_never_span_two_scenes_and_keep_every_episode_once():
+    ids = [f"b/shared/2/{i:07d}" for i in range(11)] + [f"a/shared/2/{i:07d}" for i in range(5)]
+    scenes = [i.split("/")[0] for i in ids]
+    chunks = make_chunks("val", "shared", 2, ids, 4, None, scenes)
+    assert [len(c.episode_ids) for c in chunks] == [4, 1, 4, 4, 3]  # scene a's 5, then b's 11, runs of 4
+    assert all(len({e.split("/")[0] for e in c.episode_ids}) == 1 for c in chunks)
+    assert [e for c in chunks for e in c.episode_ids] == sorted(ids)
+    assert [c.part for c in chunks] == list(range(5))
+
+
+def test_a_run_of_another_chunking_rule_is_a_different_evaluation(tmp_path):
+    from main_bench.evaluation.settings import CHUNKING, EvalSettings
+
+    identity = EvalSettings(episodes=tmp_path, split="val", agent="baseline:random", out=tmp_path).identity()
+    assert identity["chunking"] == CHUNKING == 2

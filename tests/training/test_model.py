@@ -110,3 +110,20 @@ def test_pack_observation_stores_depth_in_millimetres():
     depth, rgb, vec = pack_observation(obs, use_rgb=False)
     assert depth.dtype == np.uint16 and depth[0, 0] == 1234 or depth[0, 0] == 1235
     assert rgb is None and vec.shape == (VEC,)
+
+
+def test_found_loss_raises_found_only_where_the_agent_stands_in_its_region():
+    from main_bench.training.ppo import found_bce
+
+    logits = torch.zeros(2, 3, 4, requires_grad=True)  # (steps, agents, actions)
+    in_region = torch.tensor([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    mask = torch.tensor([[1.0, 1.0, 0.0], [1.0, 1.0, 1.0]])  # agent 2 had left at step 0
+    loss = found_bce(logits, in_region, mask, mask.sum())
+    loss.backward()
+    grad = logits.grad[..., 0]
+    assert grad[0, 0] < 0 and grad[1, 2] < 0  # descending raises p(found) where a call would be correct
+    assert grad[0, 1] > 0 and grad[1, 0] > 0 and grad[1, 1] > 0  # and lowers it elsewhere
+    assert grad[0, 2] == 0  # nothing from a step where the agent was not alive
+    p = torch.softmax(logits.detach(), -1)[..., 0]
+    expected = -(in_region * p.log() + (1 - in_region) * (1 - p).log())
+    assert float(loss.detach()) == pytest.approx(float((expected * mask).sum() / mask.sum()), rel=1e-6)

@@ -84,10 +84,17 @@ def test_agents_leave_individually_and_sub_envs_reset_themselves(tiny_dataset):
         oracle.reset(EpisodeInfo(ids, "individual", "gps", dict.fromkeys(ids, TargetInfo("point")), env.max_steps,
                                  0), world)
         left_at, steps = None, 0
+        assert not arrays["in_region"][0].any()  # starts are at least 2 m from their targets
         while steps < 400:
             world.update(env._sim.positions, env._sim.yaws, env._distances)
             chosen = oracle.act({a: {} for a in env.agents})
             acts = [chosen.get(a, 2) for a in ids]
+            # in_region is the env's own test of a correct call, at the pose the agents act from
+            assert arrays["in_region"][0].tolist() == [
+                a in env.agents and bool(env._distances[i] <= env._judge.rules.success_distance)
+                for i, a in enumerate(ids)]
+            if left_at is None and acts[0] == 0:
+                assert arrays["in_region"][0, 0]  # the oracle calls found only from inside its region
             if left_at is None:
                 acts[1] = 2  # agent 1 turns in place until agent 0 has reached its goal and left
             arrays["actions"][0] = acts
