@@ -101,6 +101,7 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                 run = _timed(cmd)
                 doc = json.loads(run["stdout"])
                 run["episodes"] = doc["episodes_run"]
+                run["cpu_s"] += float(doc.get("worker_cpu_seconds", 0.0))  # forkserver workers: not our children
                 runs[workers].append(run)
                 shutil.rmtree(dest, ignore_errors=True)
         w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")

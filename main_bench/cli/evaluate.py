@@ -155,6 +155,7 @@ def evaluate(
         "episodes_run": outcome.episodes_run,
         "agent_steps": outcome.agent_steps,
         "seconds": round(outcome.seconds, 3),
+        "worker_cpu_seconds": round(outcome.worker_cpu_seconds, 3),
         "agent_steps_per_second": round(outcome.agent_steps_per_second, 1),
         "counts": outcome.summary["counts"],
         "tracks": outcome.summary["tracks"],

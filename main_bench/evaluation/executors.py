@@ -57,7 +57,15 @@ def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any) -> 
     finally:
         if ctx is not None:
             ctx.close()
-        results.put(("exit", None))
+        results.put(("exit", _cpu_seconds()))
+
+
+def _cpu_seconds() -> float:
+    """CPU seconds of this process and its waited-for children (a submission's policy processes)."""
+    import resource
+
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 class Blocks:
@@ -92,6 +100,8 @@ class LocalWorkers:
         context = mp.get_context("forkserver")
         context.set_forkserver_preload(["main_bench.evaluation.worker"])
         self.n = n
+        #: CPU seconds the workers reported when they exited (they are not this process's children).
+        self.cpu_seconds = 0.0
         self.jobs = [context.Queue() for _ in range(n)]
         self.results = context.Queue()
         self.procs = [context.Process(target=_local_worker, args=(settings, k, self.jobs[k], self.results),
@@ -119,6 +129,7 @@ class LocalWorkers:
             if kind == "error":
                 raise pickle.loads(value)
             if kind == "exit":
+                self.cpu_seconds += float(value)
                 exited += 1
                 if exited == self.n and done < len(chunks):
                     raise RuntimeError("workers exited before finishing every chunk; run again to resume")
@@ -132,12 +143,18 @@ class LocalWorkers:
             p.join(timeout=30)
 
     def close(self) -> None:
-        """Stop the workers still running (after `run`, they have exited) and release the queues."""
+        """Stop the workers still running (after `run`, they have exited), collect the CPU seconds of those that
+        exited, and release the queues."""
         for p in self.procs:
             if p.is_alive():
                 p.terminate()
         for p in self.procs:
             p.join(timeout=10)
+        with contextlib.suppress(Exception):
+            while True:
+                kind, value = self.results.get(timeout=0.05)
+                if kind == "exit":
+                    self.cpu_seconds += float(value)
         for q in (*self.jobs, self.results):
             with contextlib.suppress(Exception):
                 q.close()

@@ -48,6 +48,8 @@ class EvaluationOutcome:
     episodes_run: int
     agent_steps: int
     seconds: float
+    #: CPU seconds of the local worker processes (0 when the episodes ran in this process or on Ray).
+    worker_cpu_seconds: float = 0.0
 
     @property
     def agent_steps_per_second(self) -> float:
@@ -158,10 +160,11 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
 
         pool = LocalWorkers(settings, settings.workers)  # they start up while this process plans
     try:
-        return _evaluate(settings, progress, pool, t0)
+        outcome = _evaluate(settings, progress, pool, t0)
     finally:
         if pool is not None:
             pool.close()
+    return outcome if pool is None else replace(outcome, worker_cpu_seconds=pool.cpu_seconds)
 
 
 def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float) -> EvaluationOutcome:

@@ -87,7 +87,8 @@ def test_results_layout_and_metrics_recomputed_from_trajectories(reference, tiny
 
 def test_workers_do_not_change_the_results(reference, tiny_dataset, tmp_path):
     out = tmp_path / "two_workers"
-    evaluate(_settings(tiny_dataset, out, workers=2))
+    outcome = evaluate(_settings(tiny_dataset, out, workers=2))
+    assert outcome.worker_cpu_seconds > 0  # the forkserver's workers report their own CPU time
     for kind in ("records", "trajectories"):
         pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
 
