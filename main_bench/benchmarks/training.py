@@ -124,8 +124,8 @@ def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int =
 
     original = resources.EpisodeResources.simulator
 
-    def timed(self: Any, scene_id: str, agents: int) -> Any:
-        return _Timed(original(self, scene_id, agents), totals)
+    def timed(self: Any, scene_id: str) -> Any:
+        return _Timed(original(self, scene_id), totals)
 
     from ..vector.sampler import InlineSampler
 

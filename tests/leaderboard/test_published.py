@@ -62,3 +62,19 @@ def test_published_board_scores_the_whole_val_split_of_the_sample():
                 assert shown[f"{metric}_ci_low"] == track["team"][metric]["ci_low"]
                 assert shown[f"{metric}_ci_high"] == track["team"][metric]["ci_high"]
             assert shown["success_wilson_low"] == track["team"]["success"]["wilson_low"]
+
+
+def test_point_goal_board_holds_the_shipped_ippo_run_ahead_of_random():
+    """leaderboard/points/: the shipped IPPO submission, random and the oracle on the point-goal copy's val split
+    (teams of 2), all on the one data set that `train point-goals episodes/sample` writes; IPPO's shared-target
+    team success interval lies above random's (the training issue's bar, as published)."""
+    points = BOARD / "points"
+    summaries = {p.name: json.loads((p / "summary.json").read_text()) for p in (points / "results").iterdir()}
+    assert sorted(summaries) == ["ippo-small", "oracle", "random"]
+    assert len({s["dataset"]["manifest_hash"] for s in summaries.values()}) == 1
+    assert all(s["settings"]["track"] == "gps" and s["settings"]["mode"] == "silent" for s in summaries.values())
+    ours = summaries["ippo-small"]["tracks"]["val/shared/2"]["team"]["success"]
+    theirs = summaries["random"]["tracks"]["val/shared/2"]["team"]["success"]
+    assert ours["ci_low"] > theirs["ci_high"]
+    board = json.loads((points / "leaderboard.json").read_text())
+    assert summaries["ippo-small"]["dataset"]["manifest_hash"] in json.dumps(board)
