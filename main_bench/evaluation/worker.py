@@ -124,8 +124,12 @@ class WorkerContext:
     def prepare(self) -> None:
         """Load, before the first chunk arrives, what every chunk needs: the policy (its process started for a
         submission) and numba's compiled navmesh kernels (from their on-disk cache), by one distance field and
-        path on the data set's first navmesh. Caches nothing that a chunk reads, so results do not change."""
-        self._policy_for()
+        path on the data set's first navmesh. Caches nothing that a chunk reads, so results do not change. Best
+        effort: a policy that fails to start here is started again, under the episode rules, by the first chunk."""
+        try:
+            self._policy_for()
+        except Exception:  # noqa: BLE001  (the first chunk meets the same failure and handles it as an episode's)
+            self._policy = None
         if not self.manifest.scenes:
             return
         from ..episodes.dataset import load_navmesh
