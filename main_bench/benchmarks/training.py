@@ -37,6 +37,7 @@ GOAL_TRAINING_RATE = 500.0
 TRAIN_ENVS = 8
 TRAIN_THREADS = 2
 
+
 def _spec(envs: int, use_rgb: bool = True) -> Any:
     from ..vector.layout import VecSpec
 

@@ -2,10 +2,10 @@
 
 Episodes of each track (`split/task/agents`), all of them or the `--limit` sample (`subset.py`, stratified by
 scene), are ordered by (scene, id) and cut into chunks of at most `chunk_size` episodes of one scene
-(`CHUNKING` 2; version 1 cut the id order regardless of scenes); chunk k of a track writes `part-k` of its records and trajectories. The chunks do not depend on
-`--workers` or the executor, so neither do the files. A chunk is finished when its ledger entry exists (written
-atomically after its trajectories and records parts, with their hashes: `ledger.py`); a restarted run skips
-finished chunks, so rows are never duplicated.
+(`settings.CHUNKING` 2; version 1 cut the id order regardless of scenes); chunk k of a track writes `part-k` of
+its records and trajectories. The chunks do not depend on `--workers` or the executor, so neither do the
+files. A chunk is finished when its ledger entry exists (written atomically after its trajectories and records
+parts, with their hashes: `ledger.py`); a restarted run skips finished chunks, so rows are never duplicated.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from .results import partition_dir
+from .records import partition_dir
 from .subset import stratified_sample
 
 

@@ -163,9 +163,9 @@ class LocalWorkers:
 
 def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage,
               pool: LocalWorkers | None = None) -> None:
-    """Run the chunks on `workers` local worker processes (`pool` when already started), or in this process
-    for one worker or one chunk."""
-    if workers <= 1 or len(chunks) <= 1:
+    """Run the chunks on `workers` local worker processes (`pool` when already started: it serves whatever the
+    chunk count), or in this process for one worker or one chunk."""
+    if pool is None and (workers <= 1 or len(chunks) <= 1):
         run_inline(settings, chunks, on_message)
         return
     own = pool is None

@@ -20,7 +20,7 @@ from ..errors import ResultsError
 from ..io import check_schema_version, read_json
 from ..parquet_read import read_parquet
 from .ledger import verify_results
-from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA, partition_dir, write_part  # noqa: F401
+from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
 
 PARTITION_SCHEMA = pa.schema([pa.field("split", pa.string()), pa.field("task", pa.string()),
                               pa.field("agents", pa.int8())])

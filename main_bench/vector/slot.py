@@ -43,7 +43,7 @@ class SubEnv:
         self._last_pos = np.array(self.env._sim.positions, dtype=np.float64)  # noqa: SLF001
         self._success = np.zeros(n, dtype=bool)
         self._write_obs(arrays, observations)
-        arrays["in_region"][self.b] = [bool(infos[a].get("in_success_region", False)) for a in self.ids]
+        arrays["in_region"][self.b] = self._in_region(infos, self.ids)
         arrays["alive"][self.b] = True
         arrays["first"][self.b] = True
 
@@ -83,8 +83,7 @@ class SubEnv:
             alive = np.array([a in env.agents for a in self.ids])
             self._write_obs(arrays, {a: observations[a] for a in env.agents})
             arrays["alive"][b] = alive
-            arrays["in_region"][b] = [a in env.agents and bool(infos[a].get("in_success_region", False))
-                                      for a in self.ids]
+            arrays["in_region"][b] = self._in_region(infos, env.agents)
             arrays["first"][b] = False
             return
         team = next((bool(infos[a]["team_success"]) for a in live if "team_success" in infos[a]), False)
@@ -93,6 +92,10 @@ class SubEnv:
                      ep_spl=float(spl.mean()), ep_return=self._return, ep_length=float(self._length))
         arrays["stats"][b] = [stats[k] for k in EPISODE_STATS]
         self.reset(arrays)
+
+    def _in_region(self, infos: dict[str, dict[str, Any]], live: list[str]) -> list[bool]:
+        """Per agent: it acts on and stands in its success region (the env's `in_success_region` info)."""
+        return [a in live and bool(infos[a].get("in_success_region", False)) for a in self.ids]
 
     def _write_obs(self, arrays: dict[str, np.ndarray], observations: dict[str, dict[str, Any]]) -> None:
         b, use_rgb = self.b, self.spec.use_rgb

@@ -18,8 +18,13 @@ from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
 from main_bench.evaluation.ledger import file_hashes
-from main_bench.evaluation.records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
-from main_bench.evaluation.results import write_part
+from main_bench.evaluation.records import (
+    RECORD_SCHEMA,
+    RESULTS_SCHEMA_VERSION,
+    TEAM,
+    TRAJECTORY_SCHEMA,
+    write_part,
+)
 from main_bench.io import atomic_write_json, sha256_file
 from main_bench.navmesh import NavMeshSettings
 from main_bench.scenes.loader import scene_content_hash
