@@ -112,7 +112,7 @@ def region_field(navmesh: NavMesh, cells: np.ndarray) -> DistanceField:
     cells = np.asarray(cells, dtype=np.int64)
     if len(cells) == 0:
         raise DatasetError("empty success region: the data set does not match its navmesh; regenerate it")
-    return navmesh.distance_field(np.asarray(navmesh.cells(), dtype=np.float64)[cells])
+    return navmesh.distance_field(navmesh.cells(cells))
 
 
 def target_region(navmesh: NavMesh, scene: Scene, target: int | np.ndarray, settings: Any) -> np.ndarray:

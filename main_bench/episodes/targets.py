@@ -99,7 +99,7 @@ class TargetBank:
                 if len(out) < count and int(isl) in big:
                     cells = point_region(self.navmesh, p, self.settings)
                     if len(cells):
-                        pts = np.asarray(self.navmesh.cells(), dtype=np.float64)[cells]
+                        pts = np.asarray(self.navmesh.cells(cells), dtype=np.float64)
                         out.append(Target(-1, "", int(isl), int(fl), pts, cells, p.copy()))
             if len(out) >= count:
                 break

@@ -17,7 +17,8 @@ from ..episodes.schema import Episode
 from .episode_loop import target_key
 
 #: Memory (MiB) of the target distance fields kept, least recently used dropped first (they are rebuilt on a
-#: miss; results do not depend on this). A field takes 24 bytes per navmesh cell: about 1 MiB on a built-in house.
+#: miss; results do not depend on this). A field takes 24 bytes per navmesh cell (about 1 MiB on a built-in house),
+#: plus 41 while its propagation is still open (`navmesh.field`: look-ups settle it only as far as they need).
 FIELD_CACHE_MIB = 256
 #: Scenes whose simulators are kept (least recently used closed first): switching back to one costs nothing.
 SIM_CACHE = 4
@@ -38,7 +39,6 @@ class EpisodeResources:
         self._plan_navmeshes: dict[str, Any] = {}
         self._sims: OrderedDict[str, Any] = OrderedDict()
         self._fields: OrderedDict[tuple, Any] = OrderedDict()
-        self._field_bytes = 0
 
     def scene(self, scene_id: str) -> tuple[Any, Any]:
         """(Scene, NavMesh) of `scene_id`: the navmesh is the one stored in the data set (`load_navmesh`)."""
@@ -103,16 +103,16 @@ class EpisodeResources:
                                        "regenerate the data set", path=self.manifest.root)
                 cells = decode_cells(episode.target_regions[i])
                 if planning:  # the region's points that lie on the planning navmesh, never snapped onto it
-                    points = np.asarray(navmesh.cells(), dtype=np.float64)[cells]
+                    points = navmesh.cells(cells)
                     plan = self._plan_navmesh(episode.scene_id)
                     points = points[np.asarray(plan.is_navigable(points), dtype=bool)]
                     field = plan.distance_field(points) if len(points) else None
                 else:
                     field = region_field(navmesh, cells)
                 self._fields[key] = field
-                self._field_bytes += _nbytes(field)
-                while self._field_bytes > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:
-                    self._field_bytes -= _nbytes(self._fields.popitem(last=False)[1])
+                # fields grow as look-ups settle them further: their sizes are summed afresh at each miss
+                while sum(_nbytes(f) for f in self._fields.values()) > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:
+                    self._fields.popitem(last=False)
             out.append(self._fields[key])
         return out
 

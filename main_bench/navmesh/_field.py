@@ -1,5 +1,7 @@
 """Numba kernels for any-angle distance fields ("source propagation") and point look-ups.
 
+A propagation is `seed`, `seed_ring`, then `settle` (resumable: it stops once given nodes are done).
+
 Every reached node v keeps an anchor s(v): a target or a corner node that v sees in a straight line, and
 g(v) = D(s) + |v - s| (3D, with smoothed heights). Anchors are numbered 0..N-1 for nodes, N+j for target j.
 Visibility is decided by induction: v sees s if its neighbour w one step towards s is linked, settled,
@@ -102,17 +104,10 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
 
 
 @njit(cache=True)
-def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
-    """Multi-source any-angle Dijkstra. Returns (g, anchor, root) per node; anchor and root -1 where unreached.
-
-    stats: (4,) int64 counters, added to (segment walks, cells walked, walks that saw, nodes settled). A
-    required argument: an array default would put its id() into numba's cache key (a compile per process).
-
-    (px, py, pz): each node's point (its corner point near walls, see `build.anchor_offsets`), (cx, cy): the
-    centres of their cells.
-
-    root: the index of the target whose propagation reached the node (the end of its path).
-    """
+def seed(nbr, px, py, pz, tnode, tpos, ztol):
+    """Start a propagation from the targets: (g, anchor, root, klo, khi, done, hk, hv, size), the state that
+    `settle` advances. g and anchor hold tentative values until a node is done; anchor and root are -1 where
+    unreached."""
     n = nbr.shape[0]
     g = np.full(n, np.inf)
     anchor = np.full(n, -1, np.int64)
@@ -120,7 +115,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
     klo = np.full(n, -np.inf)
     khi = np.full(n, np.inf)
     done = np.zeros(n, np.bool_)
-    cap = n * 8 + 9 * tnode.shape[0] + 1
+    cap = 9 * tnode.shape[0] + 1024
     hk = np.empty(cap)
     hv = np.empty(cap, np.int64)
     size = 0
@@ -143,8 +138,17 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
                 klo[u] = -np.inf
                 khi[u] = np.inf
             size = _heap4_push(hk, hv, size, d, u)
-    # The target node's centre is not the target: its neighbours cannot use the bracket test against it (which
-    # needs settled neighbours anchored at the target), so the first ring is seeded by walking each segment.
+    return g, anchor, root, klo, khi, done, hk, hv, size
+
+
+@njit(cache=True)
+def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, khi, hk, hv, size):
+    """Seed the targets' first ring of neighbours (after `seed`); returns the queue's new size.
+
+    The target node's centre is not the target: its neighbours cannot use the bracket test against it (which
+    needs settled neighbours anchored at the target), so the first ring is seeded by walking each segment.
+    """
+    n = nbr.shape[0]
     for j in range(tnode.shape[0]):
         u = tnode[j]
         if u < 0:
@@ -168,7 +172,33 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
             klo[v] = (dz - ztol) / dh
             khi[v] = (dz + ztol) / dh
             size = _heap4_push(hk, hv, size, d, v)
+    return size
+
+
+@njit(cache=True)
+def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo, khi, done, hk, hv, size,
+           stops, stats):
+    """Advance a propagation (state from `seed` and `seed_ring`) until every node in `stops` (-1 entries
+    ignored) is done, or to the end when `stops` is empty. Returns (size, full): the queue's size (0 when every
+    reachable node is done) and whether it stopped early because the queue (hk, hv) needs more room.
+
+    Nodes are settled in the same order however the work is split between calls, so a node's (g, anchor, root)
+    once done are those of one uninterrupted run.
+
+    stats: (4,) int64 counters, added to (segment walks, cells walked, walks that saw, nodes settled).
+    """
+    n = nbr.shape[0]
+    nstops = stops.shape[0]
+    k = 0
     while size > 0:
+        if nstops > 0:
+            while k < nstops and (stops[k] < 0 or done[stops[k]]):
+                k += 1
+            if k == nstops:
+                break
+        if size + 8 > hk.shape[0]:
+            return size, True  # the caller grows the queue and calls again (arrays are not reassigned here:
+            # a kernel that reassigns them runs about a tenth slower)
         key, u, size = _heap4_pop(hk, hv, size)
         if done[u] or key > g[u]:
             continue
@@ -249,7 +279,7 @@ def propagate(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, stats):
                 klo[v] = blo
                 khi[v] = bhi
                 size = _heap4_push(hk, hv, size, best, v)
-    return g, anchor, root
+    return size, False
 
 
 @njit(cache=True)

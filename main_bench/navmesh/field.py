@@ -1,4 +1,9 @@
-"""Distance fields: one any-angle propagation from target(s), then cheap distances and paths from any point."""
+"""Distance fields: one any-angle propagation from target(s), then cheap distances and paths from any point.
+
+The propagation runs only as far as look-ups need: a field asked about points 5 m from its target settles
+about that disc, not the whole building; `complete()` or `cell_distances()` runs it to the end. A look-up's
+answer does not depend on how far the field had run before it (nodes settle in the same order either way).
+"""
 
 from __future__ import annotations
 
@@ -41,14 +46,48 @@ class DistanceField:
         self._tpos = np.ascontiguousarray(tpos)
         self._tpos_surface = tpos.copy()
         self._tpos_surface[:, 2] = g.z[safe]
-        self._g, self._anchor, self._root = _field.propagate(navmesh._links32(), navmesh._ax, navmesh._ay, g.zs, nodes,
-                                                             self._tpos, LINE_Z_TOLERANCE, g.cell_size,
-                                                             navmesh._px, navmesh._py, np.zeros(4, np.int64))
+        links = navmesh._links32()
+        g_, anchor, root, klo, khi, done, hk, hv, size = _field.seed(links, navmesh._ax, navmesh._ay, g.zs, nodes,
+                                                                      self._tpos, LINE_Z_TOLERANCE)
+        size = _field.seed_ring(links, navmesh._ax, navmesh._ay, g.zs, nodes, self._tpos, LINE_Z_TOLERANCE,
+                                g.cell_size, navmesh._px, navmesh._py, g_, anchor, klo, khi, hk, hv, size)
+        self._g, self._anchor, self._root = g_, anchor, root
+        #: the propagation's remaining state (slopes, settled flags, queue); None once every node is settled
+        self._open: tuple | None = (klo, khi, done, hk, hv, size)
+        #: (segment walks, cells walked, walks that saw, nodes settled) so far
+        self.stats = np.zeros(4, np.int64)
+
+    def _settle(self, nodes: np.ndarray, finish: bool) -> None:
+        """Settle the propagation until every node in `nodes` is done (to its end with `finish`): the nodes'
+        distances are then those of a whole-field run, which is only ever run as far as look-ups need."""
+        if self._open is None or not (finish or len(nodes)):
+            return
+        nm = self.navmesh
+        g = nm._grid
+        klo, khi, done, hk, hv, size = self._open
+        stops = np.zeros(0, np.int64) if finish else np.ascontiguousarray(nodes, dtype=np.int64)
+        while True:
+            size, full = _field.settle(nm._links32(), nm._ax, nm._ay, g.zs, self.target_nodes, self._tpos,
+                                       LINE_Z_TOLERANCE, g.cell_size, nm._px, nm._py, self._g, self._anchor,
+                                       self._root, klo, khi, done, hk, hv, size, stops, self.stats)
+            if not full:
+                break
+            hk = np.concatenate([hk, np.empty(len(hk) + 8)])  # the queue doubles: numpy, not the kernel
+            hv = np.concatenate([hv, np.empty(len(hv) + 8, np.int64)])
+        self._open = None if size == 0 else (klo, khi, done, hk, hv, size)
+
+    def complete(self) -> DistanceField:
+        """Settle every reachable cell now (look-ups otherwise settle only as far as they need); returns self."""
+        self._settle(np.zeros(0, np.int64), finish=True)
+        return self
 
     @property
     def nbytes(self) -> int:
-        """Memory held by the field's per-cell arrays (bytes)."""
-        return self._g.nbytes + self._anchor.nbytes + self._root.nbytes
+        """Memory held by the field's per-cell arrays and, until it is complete, its propagation state (bytes)."""
+        held = self._g.nbytes + self._anchor.nbytes + self._root.nbytes
+        if self._open is not None:
+            held += sum(a.nbytes for a in self._open[:5])
+        return held
 
     @property
     def reachable_targets(self) -> np.ndarray:
@@ -57,6 +96,7 @@ class DistanceField:
 
     def cell_distances(self) -> np.ndarray:
         """(C,) geodesic distance (m) from each navigable cell centre (`NavMesh.cells()` order); inf if unreached."""
+        self.complete()
         return self._g.copy()
 
     def distance(self, points: np.ndarray) -> np.ndarray | float:
@@ -71,6 +111,7 @@ class DistanceField:
         nm = self.navmesh
         g = nm._grid
         nodes = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
+        self._settle(nodes, finish=False)
         d = _field.lookup(pts, nodes, self._g, self._anchor, self._root, nm._ax, nm._ay, g.zs, g.z,
                           self._tpos, self._tpos_surface, g.x0, g.y0, g.cell_size, g.ix, g.iy)
         return float(d[0]) if single else d
@@ -81,6 +122,7 @@ class DistanceField:
         nm = self.navmesh
         g = nm._grid
         node = int(nm._nodes_of(p, snap_radius=SNAP_RADIUS)[0])
+        self._settle(np.array([node], np.int64), finish=False)
         if node < 0 or self._anchor[node] < 0:
             return np.zeros((0, 3))
         n = len(g.z)

@@ -277,9 +277,13 @@ class NavMesh:
                 "floors": [f.to_json() for f in self.floors], "islands": [i.to_json() for i in self.islands]}
 
     # ----------------------------------------------------------------- grid accessors
-    def cells(self) -> np.ndarray:
-        """(C, 3) centres of navigable cells at surface height, m."""
-        return np.stack([self._px, self._py, self._grid.z], axis=1)
+    def cells(self, index: np.ndarray | None = None) -> np.ndarray:
+        """(C, 3) centres of navigable cells at surface height, m; with `index`, only those cells' rows (cheaper
+        than indexing the whole array on a large navmesh)."""
+        if index is None:
+            return np.stack([self._px, self._py, self._grid.z], axis=1)
+        index = np.asarray(index, dtype=np.int64)
+        return np.stack([self._px[index], self._py[index], self._grid.z[index]], axis=1)
 
     def cell_island(self) -> np.ndarray:
         """(C,) island index of each cell (same order as `cells`)."""
