@@ -6,6 +6,8 @@ with `OPENBLAS_NUM_THREADS=1`). Imports nothing heavy."""
 from __future__ import annotations
 
 import os
+import sys
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -27,3 +29,17 @@ def single_threaded_children() -> Iterator[None]:
         for name, value in saved.items():
             if value is None:
                 os.environ.pop(name, None)
+
+
+#: Modules whose native state a forked child must not inherit, once loaded: GL contexts and the driver's threads
+#: (a child forked after a context was made hangs in its first `glReadPixels` on Mesa llvmpipe), torch's thread
+#: pools. (pybullet is imported by the worker's modules; importing it starts nothing, and a child makes its own
+#: physics client.)
+FORK_UNSAFE_MODULES = ("moderngl", "torch")
+
+
+def fork_is_safe() -> bool:
+    """Whether worker processes may be forked from this one: Linux, this process runs one thread, and none of
+    `FORK_UNSAFE_MODULES` is loaded. A forked worker starts with this process's imports and loaded kernels."""
+    return (sys.platform.startswith("linux") and threading.active_count() == 1
+            and not any(name in sys.modules for name in FORK_UNSAFE_MODULES))

@@ -101,7 +101,8 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                 run = _timed(cmd)
                 doc = json.loads(run["stdout"])
                 run["episodes"] = doc["episodes_run"]
-                run["cpu_s"] += float(doc.get("worker_cpu_seconds", 0.0))  # forkserver workers: not our children
+                if not doc.get("workers_forked"):  # forkserver workers are not our children: they report their CPU
+                    run["cpu_s"] += float(doc.get("worker_cpu_seconds", 0.0))
                 runs[workers].append(run)
                 shutil.rmtree(dest, ignore_errors=True)
         w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")

@@ -119,7 +119,7 @@ def _start(scene: Path, env: dict[str, str], repeats: int) -> dict[str, Any]:
 
 
 def _cli() -> list[str]:
-    return [sys.executable, "-c", "import sys; from main_bench.cli.app import main; sys.argv[0] = 'main-bench'; sys.exit(main())"]
+    return [sys.executable, "-c", "import sys; from main_bench.cli.app import run; sys.argv[0] = 'main-bench'; run()"]
 
 
 def _navmesh_build_cmd(scene: Path, out: Path) -> list[str]:

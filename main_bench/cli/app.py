@@ -6,6 +6,7 @@ traceback is shown only with `--debug`.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import sys
 
@@ -114,5 +115,27 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def run() -> None:
+    """The console script (and `python -m main_bench.cli.app`): `main()`, then exit without the interpreter's
+    teardown, which frees every object and library one by one: 0.37 s after an evaluation (numba, GL, pybullet
+    loaded) against 0.03 s. What a normal exit guarantees is kept: other threads are joined, `atexit` handlers
+    run (they stop and join child processes and remove temporary folders), standard streams are flushed. Every
+    file the toolkit writes is closed (written atomically) before `main` returns. Unexpected errors exit
+    normally, with their traceback."""
+    code = main()
+    import atexit
+    import os
+    import threading
+
+    for thread in threading.enumerate():
+        if thread is not threading.main_thread() and not thread.daemon:
+            thread.join()
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

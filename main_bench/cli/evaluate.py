@@ -156,6 +156,7 @@ def evaluate(
         "agent_steps": outcome.agent_steps,
         "seconds": round(outcome.seconds, 3),
         "worker_cpu_seconds": round(outcome.worker_cpu_seconds, 3),
+        "workers_forked": outcome.workers_forked,
         "agent_steps_per_second": round(outcome.agent_steps_per_second, 1),
         "counts": outcome.summary["counts"],
         "tracks": outcome.summary["tracks"],

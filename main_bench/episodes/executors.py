@@ -7,12 +7,13 @@ returned in the order of the specs whatever order units finish in.
 from __future__ import annotations
 
 import multiprocessing
+import threading
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
 from ..errors import InputError, MainBenchError
-from ..worker_threads import single_threaded_children
+from ..worker_threads import fork_is_safe, single_threaded_children
 
 Unit = Callable[[dict[str, Any]], list[dict[str, Any]]]
 
@@ -35,21 +36,53 @@ def run_units(fn: Unit, specs: list[dict[str, Any]], *, executor: str = "local",
 
 
 def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick: Callable[[int], None]) -> list:
+    """`workers - 1` pool processes take units from the front of the list, one at a time each, while this
+    process (one more worker, with nothing to start) takes them from the back. The processes are forked where
+    `fork_is_safe()` (they then start with this process's imports); otherwise spawned."""
     results: list[Any] = [None] * len(specs)
-    ctx = multiprocessing.get_context("spawn")
-    with single_threaded_children(), ProcessPoolExecutor(max_workers=min(workers, len(specs)), mp_context=ctx) as pool:
-        futures = {pool.submit(fn, spec): i for i, spec in enumerate(specs)}
-        pending = set(futures)
-        while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in finished:
-                i = futures[fut]
-                try:
-                    results[i] = fut.result()
-                except BaseException:
-                    pool.shutdown(wait=True, cancel_futures=True)  # queued units never start
-                    raise
+    procs = min(workers - 1, len(specs))
+    ctx = multiprocessing.get_context("fork" if fork_is_safe() else "spawn")
+    lock = threading.RLock()  # a done callback can run at once, in the thread that holds it
+    bounds = {"front": 0, "back": len(specs)}  # units [front, back) are not claimed yet
+    futures: dict[Any, int] = {}
+
+    with single_threaded_children(), ProcessPoolExecutor(max_workers=procs, mp_context=ctx) as pool:
+
+        def top_up(_: Any = None) -> None:  # also a done callback: a finished process gets its next unit at once
+            with lock:
+                while sum(not f.done() for f in futures) < procs and bounds["front"] < bounds["back"]:
+                    i = bounds["front"]
+                    bounds["front"] += 1
+                    fut = pool.submit(fn, specs[i])
+                    futures[fut] = i
+                    fut.add_done_callback(top_up)
+
+        try:
+            top_up()
+            while True:
+                with lock:
+                    if bounds["front"] >= bounds["back"]:
+                        break
+                    bounds["back"] -= 1
+                    i = bounds["back"]
+                results[i] = fn(specs[i])
                 tick(sizes[i])
+            reported: set[Any] = set()
+            while True:
+                with lock:
+                    pending = [f for f in futures if f not in reported]
+                if not pending:
+                    break
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in finished:
+                    reported.add(fut)
+                    results[futures[fut]] = fut.result()
+                    tick(sizes[futures[fut]])
+        except BaseException:
+            with lock:
+                bounds["front"] = bounds["back"]  # no more submissions
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
     return results
 
 

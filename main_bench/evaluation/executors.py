@@ -12,11 +12,12 @@ import contextlib
 import multiprocessing as mp
 import pickle
 import queue
+import threading
 import traceback
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from ..worker_threads import single_threaded_children
+from ..worker_threads import fork_is_safe, single_threaded_children
 from .chunks import Chunk
 from .settings import EvalSettings
 from .worker import WorkerContext
@@ -35,11 +36,11 @@ def run_inline(settings: EvalSettings, chunks: Sequence[Chunk], on_message: OnMe
         ctx.close()
 
 
-def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any) -> None:
+def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any, warm: bool) -> None:
     ctx = None
     try:
         ctx = WorkerContext(settings)
-        ctx.prepare()
+        ctx.prepare(kernels=not warm)
         while True:
             results.put(("want", wid))
             chunk = jobs.get()
@@ -92,59 +93,130 @@ class Blocks:
 
 
 class LocalWorkers:
-    """`n` worker processes forked from a forkserver that has imported the worker's modules once (a clean
-    process: no simulator or GL state of this one is shared), started before the evaluation is planned so that their imports, numba kernel loading and policy start (`WorkerContext.prepare`)
-    overlap the parent's planning. `run` feeds them chunks once; `close` stops them."""
+    """`n` worker processes, started before the evaluation is planned, then fed chunks by `run` (once; with
+    `inline`, this process works through chunks beside them); `close` stops them.
+
+    Where `fork_is_safe()` (Linux, one thread, no GL, physics or torch loaded: the command line's case) they are
+    forked from this process once it has imported the worker's modules and loaded numba's navmesh kernels, which
+    it needs for its own chunks anyway: a worker then starts with nothing to import or load (it starts its
+    policy, `WorkerContext.prepare`, while this process plans). Otherwise they come from a forkserver that has
+    imported the worker's modules, and load the kernels themselves."""
 
     def __init__(self, settings: EvalSettings, n: int) -> None:
-        context = mp.get_context("forkserver")
-        context.set_forkserver_preload(["main_bench.evaluation.worker"])
+        warm = fork_is_safe()
+        #: whether the workers were forked from this process (the OS then counts their CPU as its children's)
+        self.forked = warm
+        if warm:
+            context = mp.get_context("fork")
+            with contextlib.suppress(Exception):  # best effort: bad input is reported by the planner, next
+                from ..episodes.dataset import read_manifest
+                from .worker import load_kernels
+
+                load_kernels(read_manifest(settings.episodes))
+        else:
+            context = mp.get_context("forkserver")
+            context.set_forkserver_preload(["main_bench.evaluation.worker"])
+        self.settings = settings
         self.n = n
-        #: CPU seconds the workers reported when they exited (they are not this process's children).
+        #: CPU seconds the workers reported when they exited.
         self.cpu_seconds = 0.0
+        #: whether `run` has finished every chunk (the workers then exit on their own)
+        self.finished = False
         self.jobs = [context.Queue() for _ in range(n)]
         self.results = context.Queue()
-        self.procs = [context.Process(target=_local_worker, args=(settings, k, self.jobs[k], self.results),
+        self.procs = [context.Process(target=_local_worker, args=(settings, k, self.jobs[k], self.results, warm),
                                       daemon=False) for k in range(n)]
         with single_threaded_children():
             for p in self.procs:
                 p.start()
 
-    def run(self, chunks: Sequence[Chunk], on_message: OnMessage) -> None:
-        """Run every chunk, worker k working through the k-th contiguous block of `chunks` (see `Blocks`)."""
-        blocks = Blocks(chunks, self.n)
-        done, exited = 0, 0
-        while done < len(chunks):
+    def run(self, chunks: Sequence[Chunk], on_message: OnMessage, inline: bool = False) -> None:
+        """Run every chunk, worker k working through the k-th contiguous block of `chunks` (see `Blocks`); with
+        `inline`, this process is one more worker (the last block): it needs no start-up, so it begins at once,
+        while a thread here hands the processes their chunks."""
+        blocks = Blocks(chunks, self.n + int(inline))
+        lock = threading.Lock()
+        state: dict[str, Any] = {"done": 0, "error": None, "stop": False}
+
+        def deliver(kind: str, value: Any) -> None:
+            with lock:
+                if kind == "chunk":
+                    state["done"] += 1
+                on_message(kind, value)
+
+        def hand_out(worker: int) -> Chunk | None:
+            with lock:
+                return None if state["stop"] else blocks.next(worker)
+
+        if not inline:
+            self._serve(len(chunks), state, deliver, hand_out, False)
+        else:
+            def serve() -> None:
+                try:
+                    self._serve(len(chunks), state, deliver, hand_out, True)
+                except BaseException as exc:  # raised by the main thread once its chunk is done
+                    state["error"] = exc
+                    state["stop"] = True
+
+            server = threading.Thread(target=serve, name="main-bench-workers", daemon=True)
+            server.start()
             try:
-                kind, value = self.results.get(timeout=1.0)
+                ctx = WorkerContext(self.settings)
+                try:
+                    while (chunk := hand_out(self.n)) is not None:
+                        report = ctx.run_chunk(chunk, lambda steps: deliver("episode", steps))
+                        deliver("chunk", report)
+                finally:
+                    ctx.close()
+            except BaseException:
+                state["stop"] = True
+                raise
+            finally:
+                self.results.put(("wake", None))  # the serving thread sees the count or the stop without a wait
+                server.join()
+            if state["error"] is not None:
+                raise state["error"]
+        for q in self.jobs:  # every chunk is done: the workers close their simulators and policy processes
+            q.put(None)  # while this process writes the summary; `close` waits for them
+        self.finished = True
+
+    def _serve(self, total: int, state: dict[str, Any], deliver: OnMessage,
+               hand_out: Callable[[int], Chunk | None], inline: bool) -> None:
+        """Answer the worker processes (chunks on request, their reports to `deliver`) until `total` chunks are
+        done (whoever ran them), `state["stop"]`, or (`inline`) every process has exited; raises a worker's
+        error."""
+        exited = 0
+        while state["done"] < total and not state["stop"] and self.n:
+            try:
+                kind, value = self.results.get(timeout=0.2)
             except queue.Empty:
                 dead = [p for p in self.procs if not p.is_alive() and p.exitcode not in (0, None)]
                 if dead and self.results.empty():
                     raise RuntimeError(f"a worker process died (exit code {dead[0].exitcode}); "
                                        "finished chunks are kept: run the same command again to resume") from None
                 continue
-            if kind == "want":
-                self.jobs[value].put(blocks.next(value))
+            if kind == "wake":
                 continue
-            if kind == "error":
+            if kind == "want":
+                self.jobs[value].put(hand_out(value))
+            elif kind == "error":
                 raise pickle.loads(value)
-            if kind == "exit":
+            elif kind == "exit":
                 self.cpu_seconds += float(value)
                 exited += 1
-                if exited == self.n and done < len(chunks):
-                    raise RuntimeError("workers exited before finishing every chunk; run again to resume")
-                continue
-            if kind == "chunk":
-                done += 1
-            on_message(kind, value)
-        for q in self.jobs:  # every chunk is done: let the workers close their simulators and policy processes
-            q.put(None)
-        for p in self.procs:
-            p.join(timeout=30)
+                if exited == self.n:
+                    if inline:  # they had no more chunks to take; this process finishes its own
+                        return
+                    if state["done"] < total:
+                        raise RuntimeError("workers exited before finishing every chunk; run again to resume")
+            else:
+                deliver(kind, value)
 
     def close(self) -> None:
-        """Stop the workers still running (after `run`, they have exited), collect the CPU seconds of those that
-        exited, and release the queues."""
+        """Wait for the workers to exit after a finished `run` (stop them at once otherwise), collect the CPU
+        seconds they report, and release the queues."""
+        for p in self.procs:
+            p.join(timeout=30 if self.finished else 0)
         for p in self.procs:
             if p.is_alive():
                 p.terminate()
@@ -163,15 +235,15 @@ class LocalWorkers:
 
 def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage,
               pool: LocalWorkers | None = None) -> None:
-    """Run the chunks on `workers` local worker processes (`pool` when already started: it serves whatever the
-    chunk count), or in this process for one worker or one chunk."""
+    """Run the chunks on `workers` local workers: this process and `workers - 1` worker processes (`pool` when
+    already started: it serves whatever the chunk count), or in this process alone for one worker or one chunk."""
     if pool is None and (workers <= 1 or len(chunks) <= 1):
         run_inline(settings, chunks, on_message)
         return
     own = pool is None
-    pool = pool or LocalWorkers(settings, min(workers, len(chunks)))
+    pool = pool or LocalWorkers(settings, min(workers, len(chunks)) - 1)
     try:
-        pool.run(chunks, on_message)
+        pool.run(chunks, on_message, inline=True)
     finally:
         if own:
             pool.close()

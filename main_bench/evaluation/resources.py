@@ -17,8 +17,8 @@ from ..episodes.schema import Episode
 from .episode_loop import target_key
 
 #: Memory (MiB) of the target distance fields kept, least recently used dropped first (they are rebuilt on a
-#: miss; results do not depend on this). A field takes 24 bytes per navmesh cell (about 1 MiB on a built-in house),
-#: plus 41 while its propagation is still open (`navmesh.field`: look-ups settle it only as far as they need).
+#: miss; results do not depend on this). A field is counted as made: 65 bytes per navmesh cell with its open
+#: propagation's state (look-ups settle it only as far as they need), 24 once complete; a built-in house's is 2.6 MiB.
 FIELD_CACHE_MIB = 256
 #: Scenes whose simulators are kept (least recently used closed first): switching back to one costs nothing.
 SIM_CACHE = 4
@@ -39,6 +39,8 @@ class EpisodeResources:
         self._plan_navmeshes: dict[str, Any] = {}
         self._sims: OrderedDict[str, Any] = OrderedDict()
         self._fields: OrderedDict[tuple, Any] = OrderedDict()
+        self._field_sizes: dict[tuple, int] = {}
+        self._field_bytes = 0
 
     def scene(self, scene_id: str) -> tuple[Any, Any]:
         """(Scene, NavMesh) of `scene_id`: the navmesh is the one stored in the data set (`load_navmesh`)."""
@@ -110,9 +112,11 @@ class EpisodeResources:
                 else:
                     field = region_field(navmesh, cells)
                 self._fields[key] = field
-                # fields grow as look-ups settle them further: their sizes are summed afresh at each miss
-                while sum(_nbytes(f) for f in self._fields.values()) > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:
-                    self._fields.popitem(last=False)
+                # counted as made: with its open propagation's state, more than it holds once complete
+                self._field_sizes[key] = _nbytes(field)
+                self._field_bytes += self._field_sizes[key]
+                while self._field_bytes > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:
+                    self._field_bytes -= self._field_sizes.pop(self._fields.popitem(last=False)[0])
             out.append(self._fields[key])
         return out
 

@@ -50,6 +50,8 @@ class EvaluationOutcome:
     seconds: float
     #: CPU seconds of the local worker processes (0 when the episodes ran in this process or on Ray).
     worker_cpu_seconds: float = 0.0
+    #: whether the local worker processes were forked from this process (their CPU is then its children's)
+    workers_forked: bool = False
 
     @property
     def agent_steps_per_second(self) -> float:
@@ -158,13 +160,13 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
     if settings.executor == "local" and settings.workers > 1:
         from .executors import LocalWorkers
 
-        pool = LocalWorkers(settings, settings.workers)  # they start up while this process plans
+        pool = LocalWorkers(settings, settings.workers - 1)  # they start up while this process plans; it works too
     try:
         outcome = _evaluate(settings, progress, pool, t0)
     finally:
         if pool is not None:
             pool.close()
-    return outcome if pool is None else replace(outcome, worker_cpu_seconds=pool.cpu_seconds)
+    return outcome if pool is None else replace(outcome, worker_cpu_seconds=pool.cpu_seconds, workers_forked=pool.forked)
 
 
 def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float) -> EvaluationOutcome:

@@ -121,27 +121,19 @@ class WorkerContext:
             raise DatasetError(f"episode {episode_id!r} is not in the data set any more; was it regenerated "
                                "under this results directory? Use a new --out", path=self.settings.episodes) from None
 
-    def prepare(self) -> None:
+    def prepare(self, kernels: bool = True) -> None:
         """Load, before the first chunk arrives, what every chunk needs: the policy (its process started for a
-        submission) and numba's compiled navmesh kernels (from their on-disk cache), by one distance field and
-        path on the data set's first navmesh. Caches nothing that a chunk reads, so results do not change. Best
-        effort: a policy that fails to start here is started again, under the episode rules, by the first chunk."""
+        submission) and, with `kernels`, numba's compiled navmesh kernels (`load_kernels`). Caches nothing that a
+        chunk reads, so results do not change. Best effort: a policy that fails to start here is started again,
+        under the episode rules, by the first chunk."""
         try:
             self._policy_for()
         except Exception:  # noqa: BLE001  (the first chunk meets the same failure and handles it as an episode's)
             self._policy = None
-        if not self.manifest.scenes:
-            return
-        from ..episodes.dataset import load_navmesh
+        if kernels:
+            load_kernels(self.manifest)
 
-        navmesh = load_navmesh(self.manifest, min(self.manifest.scenes))
-        cells = np.asarray(navmesh.cells(), dtype=np.float64)
-        if len(cells) >= 2:
-            field = navmesh.distance_field(cells[:1])
-            field.path(cells[-1])
-            navmesh.snap(cells[-1:])
-
-    # -- work ---------------------------------------------------------------------------------------------------
+        # -- work ---------------------------------------------------------------------------------------------------
 
     def run_chunk(self, chunk: Chunk, on_episode: Callable[[int], None] | None = None) -> ChunkReport:
         """Play the chunk's episodes, write its trajectories then its records part; report.
@@ -271,3 +263,18 @@ def trajectory_table(trace: EpisodeTrace, talk: tuple[np.ndarray, np.ndarray] | 
         },
         schema=TRAJECTORY_SCHEMA,
     )
+
+
+def load_kernels(manifest: Any) -> None:
+    """Load numba's compiled navmesh kernels (from their on-disk cache) in this process, by one distance field,
+    path and snap on the data set's first navmesh. Caches nothing that an evaluation reads."""
+    if not manifest.scenes:
+        return
+    from ..episodes.dataset import load_navmesh
+
+    navmesh = load_navmesh(manifest, min(manifest.scenes))
+    cells = np.asarray(navmesh.cells(), dtype=np.float64)
+    if len(cells) >= 2:
+        field = navmesh.distance_field(cells[:1])
+        field.path(cells[-1])
+        navmesh.snap(cells[-1:])

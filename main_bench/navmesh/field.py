@@ -62,9 +62,11 @@ class DistanceField:
         distances are then those of a whole-field run, which is only ever run as far as look-ups need."""
         if self._open is None or not (finish or len(nodes)):
             return
+        klo, khi, done, hk, hv, size = self._open
+        if not finish and bool(done[nodes[nodes >= 0]].all()):
+            return  # the common case on an agent's step: its cell is already settled (no kernel call)
         nm = self.navmesh
         g = nm._grid
-        klo, khi, done, hk, hv, size = self._open
         stops = np.zeros(0, np.int64) if finish else np.ascontiguousarray(nodes, dtype=np.int64)
         while True:
             size, full = _field.settle(nm._links32(), nm._ax, nm._ay, g.zs, self.target_nodes, self._tpos,

@@ -359,7 +359,7 @@ class NavMesh:
             self._check_island(island)
             nodes = np.where((nodes >= 0) & (g.island[np.maximum(nodes, 0)] == island), nodes, -1)
         on = nodes >= 0
-        tree, ids = self._tree(island)
+        tree, ids = self._tree(island) if (~on).any() else (None, np.zeros(0, np.int64))
         if (~on).any() and len(ids):
             bound = max_distance if math.isfinite(max_distance) else np.inf
             dist, k = tree.query(pts[~on], distance_upper_bound=bound + g.cell_size)

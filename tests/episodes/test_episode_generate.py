@@ -142,6 +142,19 @@ def test_worker_count_does_not_change_the_bytes(gen, tmp_path):
     assert dataset_bytes(one) == dataset_bytes(two)
 
 
+def test_workers_forked_by_the_command_give_the_same_bytes(gen, tmp_path, ep_scenes, ep_cache):
+    """The command line (one thread, no GL) forks its pool processes, and runs units itself beside them."""
+    one, two = tmp_path / "w1", tmp_path / "w2"
+    assert gen(one, "--shard-size", "10", "--workers", "1").code == 0
+    argv = ["episodes", "generate", "--scenes", str(ep_scenes / "scenes"), "--splits", str(ep_scenes / "splits.json"),
+            "--out", str(two), "--cache-dir", str(ep_cache), "--per-scene", "24", "--json", "--up", "z",
+            "--agents", "2,3", "--shard-size", "10", "--workers", "3"]
+    proc = subprocess.run([sys.executable, "-m", "main_bench.cli.app", *argv], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert dataset_bytes(one) == dataset_bytes(two)
+
+
 @pytest.fixture
 def local_ray():
     try:

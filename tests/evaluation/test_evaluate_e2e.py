@@ -260,6 +260,21 @@ def test_ray_executor_gives_the_same_files(reference, tiny_dataset, tmp_path):
         pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
 
 
+def test_workers_forked_by_the_command_give_the_same_files(reference, tiny_dataset, tmp_path):
+    """The command line forks its worker process (after loading the navmesh kernels) and works beside it."""
+    dataset, cache = tiny_dataset
+    out = tmp_path / "forked"
+    args = ["evaluate", "--episodes", dataset, "--split", "val", "--agent", WALKER, "--out", out, "--limit", "4",
+            "--chunk-size", "2", "--cache-dir", cache, "--no-progress", "--json", "--workers", "2"]
+    proc = subprocess.run([sys.executable, "-m", "main_bench.cli.app", *map(str, args)], capture_output=True,
+                          text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["workers_forked"] is (sys.platform == "linux") and doc["episodes_run"] == 8
+    for kind in ("records", "trajectories"):
+        pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
+
+
 def test_workers_started_before_planning_stop_on_bad_input(tiny_dataset, tmp_path):
     """The local workers start before the evaluation is planned; a split the data set lacks is still refused
     with the planner's own error, nothing is written, and no worker process is left behind."""
