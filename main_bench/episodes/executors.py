@@ -50,12 +50,31 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick:
 
         def top_up(_: Any = None) -> None:  # also a done callback: a finished process gets its next unit at once
             with lock:
+                if any(f.done() and not f.cancelled() and f.exception() is not None for f in futures):
+                    return  # a unit failed: the error is raised below, nothing more starts
                 while sum(not f.done() for f in futures) < procs and bounds["front"] < bounds["back"]:
                     i = bounds["front"]
                     bounds["front"] += 1
                     fut = pool.submit(fn, specs[i])
                     futures[fut] = i
                     fut.add_done_callback(top_up)
+
+        reported: set[Any] = set()
+
+        def collect(block: bool) -> bool:
+            """Take the results of finished pool units (raising a unit's error); False when none is left."""
+            with lock:
+                if bounds["front"] < bounds["back"]:
+                    top_up()  # a done callback may not have run yet: start the next unit here
+                pending = [f for f in futures if f not in reported]
+            if not pending:
+                return False
+            finished = wait(pending, return_when=FIRST_COMPLETED)[0] if block else [f for f in pending if f.done()]
+            for fut in finished:
+                reported.add(fut)
+                results[futures[fut]] = fut.result()
+                tick(sizes[futures[fut]])
+            return True
 
         try:
             top_up()
@@ -67,17 +86,9 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick:
                     i = bounds["back"]
                 results[i] = fn(specs[i])
                 tick(sizes[i])
-            reported: set[Any] = set()
-            while True:
-                with lock:
-                    pending = [f for f in futures if f not in reported]
-                if not pending:
-                    break
-                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in finished:
-                    reported.add(fut)
-                    results[futures[fut]] = fut.result()
-                    tick(sizes[futures[fut]])
+                collect(block=False)
+            while collect(block=True):
+                pass
         except BaseException:
             with lock:
                 bounds["front"] = bounds["back"]  # no more submissions

@@ -96,7 +96,7 @@ class LocalWorkers:
     """`n` worker processes, started before the evaluation is planned, then fed chunks by `run` (once; with
     `inline`, this process works through chunks beside them); `close` stops them.
 
-    Where `fork_is_safe()` (Linux, one thread, no GL, physics or torch loaded: the command line's case) they are
+    Where `fork_is_safe()` (Linux, one thread, no GL or torch loaded: the command line's case) they are
     forked from this process once it has imported the worker's modules and loaded numba's navmesh kernels, which
     it needs for its own chunks anyway: a worker then starts with nothing to import or load (it starts its
     policy, `WorkerContext.prepare`, while this process plans). Otherwise they come from a forkserver that has
