@@ -133,7 +133,7 @@ class WorkerContext:
         if kernels:
             load_kernels(self.manifest)
 
-        # -- work ---------------------------------------------------------------------------------------------------
+    # -- work ---------------------------------------------------------------------------------------------------
 
     def run_chunk(self, chunk: Chunk, on_episode: Callable[[int], None] | None = None) -> ChunkReport:
         """Play the chunk's episodes, write its trajectories then its records part; report.
