@@ -40,7 +40,6 @@ class EpisodeResources:
         self._sims: OrderedDict[str, Any] = OrderedDict()
         self._fields: OrderedDict[tuple, Any] = OrderedDict()
         self._field_sizes: dict[tuple, int] = {}
-        self._field_bytes = 0
 
     def scene(self, scene_id: str) -> tuple[Any, Any]:
         """(Scene, NavMesh) of `scene_id`: the navmesh is the one stored in the data set (`load_navmesh`)."""
@@ -114,9 +113,8 @@ class EpisodeResources:
                 self._fields[key] = field
                 # counted as made: with its open propagation's state, more than it holds once complete
                 self._field_sizes[key] = _nbytes(field)
-                self._field_bytes += self._field_sizes[key]
-                while self._field_bytes > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:
-                    self._field_bytes -= self._field_sizes.pop(self._fields.popitem(last=False)[0])
+                while sum(self._field_sizes.values()) > FIELD_CACHE_MIB * 2**20 and len(self._fields) > 1:
+                    del self._field_sizes[self._fields.popitem(last=False)[0]]
             out.append(self._fields[key])
         return out
 

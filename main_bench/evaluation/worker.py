@@ -267,14 +267,14 @@ def trajectory_table(trace: EpisodeTrace, talk: tuple[np.ndarray, np.ndarray] | 
 
 def load_kernels(manifest: Any) -> None:
     """Load numba's compiled navmesh kernels (from their on-disk cache) in this process, by one distance field,
-    path and snap on the data set's first navmesh. Caches nothing that an evaluation reads."""
+    look-up, path and snap on the data set's first navmesh. Caches nothing that an evaluation reads."""
     if not manifest.scenes:
         return
     from ..episodes.dataset import load_navmesh
 
     navmesh = load_navmesh(manifest, min(manifest.scenes))
-    cells = np.asarray(navmesh.cells(), dtype=np.float64)
-    if len(cells) >= 2:
-        field = navmesh.distance_field(cells[:1])
-        field.path(cells[-1])
-        navmesh.snap(cells[-1:])
+    cell = navmesh.cells(np.zeros(1, np.int64))
+    field = navmesh.distance_field(cell)
+    field.distance(cell)  # a look-up at the target itself: the field settles one cell, not the island
+    field.path(cell[0])
+    navmesh.snap(cell)
