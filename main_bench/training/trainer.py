@@ -118,8 +118,13 @@ class Trainer:
         return self.update
 
     def checkpoint(self, wall: float) -> None:
-        """Write `checkpoint.pt` atomically (model, optimiser, counters, the curve's episode window)."""
+        """Write the curve, then `checkpoint.pt` atomically (model, optimiser, counters, the curve's episode window).
+
+        In that order, a run killed between the two writes leaves a curve with every row the checkpoint counts
+        (a resumed run drops rows past the checkpoint's update); the other order could lose the last rows."""
         import torch
+
+        write_curve(self.run_dir, self.curve)
 
         state = {"version": CHECKPOINT_VERSION, "config": model_config(self.settings).to_dict(),
                  "settings": self.settings.to_dict(), "model": self.net.state_dict(),
@@ -128,7 +133,6 @@ class Trainer:
         buffer = io.BytesIO()
         torch.save(state, buffer)
         atomic_write_bytes(self.run_dir / CHECKPOINT, buffer.getvalue())
-        write_curve(self.run_dir, self.curve)
 
     # -- the loop -----------------------------------------------------------------------------------------------
 
