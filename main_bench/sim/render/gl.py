@@ -6,8 +6,8 @@ into the output arrays. The views are drawn either in one pass (OpenGL 4.3 with 
 viewport, `viewports`): the poses go up once as per-view instance records and each batch of faces is one
 indirect multi-draw with a command per view (or per visible cell run), the viewport index chosen in the vertex
 shader; or view by view (OpenGL 3.3): the view's record bound from a uniform buffer and its viewport set. The
-two give the same images (`tests/sim/test_gl_passes.py`); on llvmpipe the pass per view is the faster and the
-default (docs/evaluation.md). The framebuffer and the per-view buffers are made once and reused; a step
+two give the same images (`tests/sim/test_gl_passes.py`); on llvmpipe and on an NVIDIA H200 the pass per view
+is the faster, and the default (docs/evaluation.md). The framebuffer and the per-view buffers are made once and reused; a step
 allocates only its output arrays and, in one pass, its small command list.
 
 The scene is baked once: unindexed triangles deduplicated into an indexed vertex buffer, ordered by grid cell
@@ -33,7 +33,7 @@ from .baked import baked_surfaces
 from .camera import NEAR_M, far_plane, focal_scales, view_axes
 from .culling import CellCuller
 from .materials import TEXTURE_SIZE, agent_colors, face_normals
-from .viewports import VIEWPORT_INDEX_EXTENSIONS, viewport_array_setter, viewport_index_extension
+from .viewports import ONE_PASS_GL, VIEWPORT_INDEX_EXTENSIONS, viewport_array_setter, viewport_index_extension
 
 #: Direction of the baked light (canonical frame); surfaces facing it or away from it are brightest.
 LIGHT_DIR = np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84])
@@ -207,9 +207,6 @@ _PAIR_RECORD = np.dtype([("offset", "<f4", 3), ("tint", "<f4", 3), ("eye", "<f4"
 #: Scene batches with fewer faces than this are drawn whole: below it, view culling on llvmpipe costs more
 #: than the faces it skips (measured: docs/evaluation.md, "gl renderer").
 CULL_MIN_TRIANGLES = 20_000
-#: GL_RENDERER substrings of software rasterisers, on which one-pass rendering is slower than a pass per view
-#: (measured on llvmpipe: docs/evaluation.md), so it is used there only when asked for.
-SOFTWARE_GL_DEVICES = ("llvmpipe", "softpipe", "swrast", "swr")
 
 
 class _Batch:
@@ -262,11 +259,18 @@ class GLDeviceMissing(GLUnavailable):
 
 
 def _context(device_index: int | None):
-    """A standalone moderngl context through EGL, on device `device_index` (None: the default display)."""
+    """A standalone moderngl context through EGL, on device `device_index` (None: the default display): GL 4.3
+    or later where the driver gives it (one-pass rendering needs it; NVIDIA's driver gives exactly the version
+    asked for, so a plain request gets 3.3 there), else moderngl's default, 3.3."""
     try:
         import moderngl
 
         extra = {} if device_index is None else {"device_index": int(device_index)}
+        try:
+            return moderngl.create_standalone_context(backend="egl", require=ONE_PASS_GL, **extra)
+        except Exception as exc:  # noqa: BLE001 - no 4.3 context here: the default one below
+            if device_index is not None and "device index" in str(exc):
+                raise
         return moderngl.create_standalone_context(backend="egl", **extra)
     except Exception as exc:  # missing libEGL, no driver, no device: all mean "no gl here"
         if device_index is not None and "device index" in str(exc):
@@ -303,8 +307,8 @@ class GLRenderer:
 
     `device_index`: the EGL device to render on (as `eglQueryDevicesEXT` lists them: GPUs, then Mesa's
     software device), None: EGL's default display. `one_pass`: render all views of a call in one pass (True;
-    raises GLUnavailable when the context cannot), one pass per view (False), or None: one pass when the
-    context allows it and is not a software rasteriser (SOFTWARE_GL_DEVICES). `cull_min_triangles`:
+    raises GLUnavailable when the context cannot) or one pass per view (False, the default: the faster on
+    llvmpipe and on an NVIDIA H200, docs/evaluation.md). `cull_min_triangles`:
     batches with fewer faces are drawn whole, without view culling.
     """
 
@@ -312,7 +316,7 @@ class GLRenderer:
 
     def __init__(self, scene: Scene, camera: CameraSettings, *, reason: str = "requested",
                  agent_radius: float = 0.18, agent_height: float = 1.5, device_index: int | None = None,
-                 one_pass: bool | None = None, cull_min_triangles: int = CULL_MIN_TRIANGLES) -> None:
+                 one_pass: bool = False, cull_min_triangles: int = CULL_MIN_TRIANGLES) -> None:
         self._ctx = _context(device_index)
         self.reason = reason
         self.camera = camera
@@ -325,9 +329,7 @@ class GLRenderer:
                                                                                       (4096, 4096))[1]))
         self._views_per_pass = max(1, max_rows // camera.height)
         self._extension = viewport_index_extension(set(self._ctx.extensions), self._ctx.version_code)
-        if one_pass is None and any(name in self.device.lower() for name in SOFTWARE_GL_DEVICES):
-            one_pass = False
-        self._set_viewports = viewport_array_setter() if self._extension and one_pass is not False else None
+        self._set_viewports = viewport_array_setter() if self._extension and one_pass else None
         if self._set_viewports is None:
             self._extension = None
         else:

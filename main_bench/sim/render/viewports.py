@@ -12,13 +12,15 @@ import numpy as np
 
 #: Extensions that let a vertex shader pick the viewport (`gl_ViewportIndex`), best first.
 VIEWPORT_INDEX_EXTENSIONS = ("GL_ARB_shader_viewport_layer_array", "GL_AMD_vertex_shader_viewport_index")
+#: The GL version (as moderngl's version_code) one-pass rendering needs: indirect multi-draws with a base instance.
+ONE_PASS_GL = 430
 
 
 def viewport_index_extension(extensions: set[str], version_code: int) -> str | None:
     """The extension to enable for one-pass rendering on a context with these extensions and GL version
     (e.g. 450), or None when the context cannot render one pass (it needs GL 4.3 for indirect multi-draws
     with a base instance, and a vertex shader that can write gl_ViewportIndex)."""
-    if version_code < 430:
+    if version_code < ONE_PASS_GL:
         return None
     return next((name for name in VIEWPORT_INDEX_EXTENSIONS if name in extensions), None)
 
