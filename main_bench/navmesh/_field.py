@@ -351,6 +351,78 @@ def locate_near(points, nodes, x0, y0, cs, nx, ny, col_start, z, below, above, r
 
 
 @njit(cache=True)
+def _ring_column(c, v0, v1, px, py, pz, z, allowed, x0, y0, cs, nx, best, bestd):
+    # the nearest allowed node of column c (cell centres at surface height) if nearer than bestd (squared)
+    jx = c % nx
+    jy = c // nx
+    hx = x0 + (jx + 0.5) * cs - px
+    hy = y0 + (jy + 0.5) * cs - py
+    h2 = hx * hx + hy * hy
+    for v in range(v0, v1):
+        if not allowed[v]:
+            continue
+        dz = z[v] - pz
+        d2 = h2 + dz * dz
+        if d2 < bestd:
+            bestd = d2
+            best = v
+    return best, bestd
+
+
+@njit(cache=True)
+def nearest_cells(points, x0, y0, cs, nx, col_start, z, allowed, box, bound):
+    """For each point, the node whose cell centre (at surface height) is nearest in 3D among `allowed[node]`,
+    strictly within `bound` m; -1 where none is (or the point is not finite). `box`: (ix0, ix1, iy0, iy1), the
+    columns that hold every allowed node.
+
+    Square rings of columns around the point's column (clamped into the box), outwards: a centre in ring r lies
+    at least sqrt(ox^2 + oy^2 + ((r - 1/2) cells)^2) away, (ox, oy) being the point's offset outside the box,
+    so the search stops once that exceeds the best distance found.
+    """
+    m = points.shape[0]
+    out = np.full(m, -1, np.int64)
+    bx0, bx1, by0, by1 = box[0], box[1], box[2], box[3]
+    for i in range(m):
+        px = points[i, 0]
+        py = points[i, 1]
+        pz = points[i, 2]
+        if not (np.isfinite(px) and np.isfinite(py) and np.isfinite(pz)) or bx1 < bx0 or by1 < by0:
+            continue
+        cx = int(min(max(np.floor((px - x0) / cs), float(bx0)), float(bx1)))
+        cy = int(min(max(np.floor((py - y0) / cs), float(by0)), float(by1)))
+        ox = max(x0 + bx0 * cs - px, px - (x0 + (bx1 + 1) * cs), 0.0)
+        oy = max(y0 + by0 * cs - py, py - (y0 + (by1 + 1) * cs), 0.0)
+        out2 = ox * ox + oy * oy
+        best = -1
+        bestd = bound * bound
+        rmax = max(max(cx - bx0, bx1 - cx), max(cy - by0, by1 - cy))
+        for r in range(rmax + 1):
+            lb = max(r - 0.5, 0.0) * cs
+            if out2 + lb * lb >= bestd:
+                break
+            for jy in (cy - r, cy + r):  # the ring's bottom and top rows
+                if jy < by0 or jy > by1:
+                    continue
+                for jx in range(max(cx - r, bx0), min(cx + r, bx1) + 1):
+                    c = jy * nx + jx
+                    best, bestd = _ring_column(c, col_start[c], col_start[c + 1], px, py, pz, z, allowed, x0, y0,
+                                               cs, nx, best, bestd)
+                if r == 0:
+                    break
+            if r == 0:
+                continue
+            for jx in (cx - r, cx + r):  # its left and right columns, corners done above
+                if jx < bx0 or jx > bx1:
+                    continue
+                for jy in range(max(cy - r + 1, by0), min(cy + r - 1, by1) + 1):
+                    c = jy * nx + jx
+                    best, bestd = _ring_column(c, col_start[c], col_start[c + 1], px, py, pz, z, allowed, x0, y0,
+                                               cs, nx, best, bestd)
+        out[i] = best
+    return out
+
+
+@njit(cache=True)
 def lookup(points, nodes, g, anchor, root, px, py, pz, z, tpos, tsurf, x0, y0, cs, ix, iy):
     """Distance from each point through its node's anchor; inf for nodes -1 or unreached.
 

@@ -128,7 +128,7 @@ class NavMesh:
         self.floors: tuple[Floor, ...] = tuple(Floor(i, z, a) for i, (z, a) in enumerate(floors))
         self._floor_z = np.array([f.z for f in self.floors])
         self.islands: tuple[Island, ...] = self._make_islands()
-        self._trees: dict[int, Any] = {}
+        self._snap_sets: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._nbr32: np.ndarray | None = None
 
     # ----------------------------------------------------------------- building and files
@@ -359,14 +359,11 @@ class NavMesh:
             self._check_island(island)
             nodes = np.where((nodes >= 0) & (g.island[np.maximum(nodes, 0)] == island), nodes, -1)
         on = nodes >= 0
-        tree, ids = self._tree(island) if (~on).any() else (None, np.zeros(0, np.int64))
-        if (~on).any() and len(ids):
-            bound = max_distance if math.isfinite(max_distance) else np.inf
-            dist, k = tree.query(pts[~on], distance_upper_bound=bound + g.cell_size)
-            found = np.isfinite(dist)
-            sub = np.full(len(k), -1, np.int64)
-            sub[found] = ids[k[found]]
-            nodes[~on] = sub
+        if not on.all():
+            bound = max_distance + g.cell_size if math.isfinite(max_distance) else np.inf
+            allowed, box = self._snap_cells(island)
+            nodes[~on] = _field.nearest_cells(pts[~on], g.x0, g.y0, g.cell_size, g.nx, g.col_start, g.z, allowed,
+                                              box, bound)
         ok = nodes >= 0
         n = nodes[ok]
         cs = g.cell_size
@@ -381,14 +378,17 @@ class NavMesh:
         if not 0 <= int(island) < len(self.islands):
             raise NavMeshError(f"island {island} does not exist; this navmesh has islands 0..{len(self.islands) - 1}")
 
-    def _tree(self, island: int | None) -> tuple[Any, np.ndarray]:
+    def _snap_cells(self, island: int | None) -> tuple[np.ndarray, np.ndarray]:
+        """The cells `snap` may answer with (those of `island`, or all): (C,) bool and the columns that hold them,
+        (ix0, ix1, iy0, iy1); made once per island."""
         key = -1 if island is None else int(island)
-        if key not in self._trees:
-            from scipy.spatial import cKDTree
-
-            ids = np.arange(len(self._grid.z)) if island is None else np.flatnonzero(self._grid.island == island)
-            self._trees[key] = (cKDTree(self.cells()[ids]), ids)
-        return self._trees[key]
+        if key not in self._snap_sets:
+            g = self._grid
+            allowed = np.ones(len(g.z), np.bool_) if island is None else g.island == key
+            ix, iy = g.ix[allowed], g.iy[allowed]
+            box = np.array([ix.min(), ix.max(), iy.min(), iy.max()] if len(ix) else [0, -1, 0, -1], np.int64)
+            self._snap_sets[key] = (allowed, box)
+        return self._snap_sets[key]
 
     def sample(self, n: int, rng: np.random.Generator, island: int | None = None) -> np.ndarray:
         """(n, 3) points uniform over the navigable area (of one island if given), at surface height."""
