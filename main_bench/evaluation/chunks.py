@@ -28,6 +28,11 @@ class Chunk:
     episode_ids: tuple[str, ...]
 
     @property
+    def weight(self) -> int:
+        """Agent-episodes in the chunk (episodes x team size): the hand-out's estimate of its work."""
+        return len(self.episode_ids) * self.agents
+
+    @property
     def key(self) -> str:
         """`<split>/<task>/<agents>#<part>`."""
         return f"{self.split}/{self.task}/{self.agents}#{self.part}"

@@ -71,24 +71,25 @@ def _cpu_seconds() -> float:
 
 class Blocks:
     """Hands out chunks to `n` workers: worker k works through the k-th contiguous block of the (scene-ordered)
-    chunks, so it stays on few scenes; an idle worker takes the last chunk of the block with most episodes left
-    (it then computes that chunk's target fields again).
+    chunks, about 1/n of their weight (`Chunk.weight`, agent-episodes), so it stays on few scenes; an idle worker
+    takes the last chunk of the block with most weight left (it then computes that chunk's target fields again;
+    the planner puts a scene's lightest chunks last, so these are small and the workers finish together).
     Which worker runs a chunk changes no file."""
 
     def __init__(self, chunks: Sequence[Chunk], n: int) -> None:
-        total = sum(len(c.episode_ids) for c in chunks)
+        total = sum(c.weight for c in chunks)
         self.blocks: list[list[Chunk]] = [[] for _ in range(n)]
         seen = 0
         for chunk in chunks:
             self.blocks[min(n - 1, seen * n // max(total, 1))].append(chunk)
-            seen += len(chunk.episode_ids)
+            seen += chunk.weight
 
     def next(self, worker: int) -> Chunk | None:
         """The next chunk for `worker`, or None when every chunk has been handed out."""
         own = self.blocks[worker]
         if own:
             return own.pop(0)
-        richest = max(self.blocks, key=lambda b: sum(len(c.episode_ids) for c in b))
+        richest = max(self.blocks, key=lambda b: sum(c.weight for c in b))
         return richest.pop() if richest else None
 
 

@@ -96,8 +96,9 @@ def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
         chunks.extend(make_chunks(settings.split, task, agents, ids, settings.chunk_size, settings.limit, scenes,
                                   settings.seed))
     # Run order only (files do not depend on it): a scene's chunks together, so that a worker keeps its scene's
-    # simulator and target fields, and consecutive chunks go to the same worker (see `executors.run_local`).
-    chunks.sort(key=lambda c: (scene_of[c.episode_ids[0]], c.task, c.agents, c.part))
+    # simulator and target fields, and consecutive chunks go to the same worker (see `executors.run_local`);
+    # within a scene the heaviest first, so that the chunks idle workers take from the ends of blocks are light.
+    chunks.sort(key=lambda c: (scene_of[c.episode_ids[0]], -c.weight, c.task, c.agents, c.part))
     return manifest, chunks
 
 

@@ -47,3 +47,21 @@ def test_a_run_of_another_chunking_rule_is_a_different_evaluation(tmp_path):
 
     identity = EvalSettings(episodes=tmp_path, split="val", agent="baseline:random", out=tmp_path).identity()
     assert identity["chunking"] == CHUNKING == 2
+
+
+
+def test_blocks_split_by_weight_and_idle_workers_take_the_light_ends():
+    """Blocks hold about equal agent-episodes; with the planner's order (a scene's heaviest chunks first), what
+    an idle worker takes from the end of another block is a light chunk."""
+    chunks = []
+    for scene in ("a", "b"):
+        chunks += make_chunks("val", "shared", 4, [f"{scene}4{i}" for i in range(8)], 8, None, [scene] * 8)
+        chunks += make_chunks("val", "shared", 2, [f"{scene}2{i:02d}" for i in range(12)], 4, None, [scene] * 12)
+    assert [c.weight for c in chunks] == [32, 8, 8, 8] * 2
+    blocks = Blocks(chunks, 2)
+    assert [[c.weight for c in b] for b in blocks.blocks] == [[32, 8, 8, 8], [32, 8, 8, 8]]
+    for _ in range(4):
+        assert blocks.next(1) is not None
+    assert blocks.next(0).weight == 32
+    stolen = blocks.next(1)  # worker 1 is done: it takes worker 0's last chunk, a light one
+    assert stolen.weight == 8 and stolen.episode_ids[0].startswith("a")

@@ -302,3 +302,15 @@ def test_a_started_pool_runs_the_chunks_it_is_given(reference, tiny_dataset, tmp
         pool.close()
     assert seen.count("chunk") == 2 and all(not p.is_alive() for p in pool.procs)
     assert all(c.finished(out) for c in chunks[:2]) and not any(c.finished(out) for c in chunks[2:])
+
+
+def test_the_planner_runs_a_scenes_heaviest_chunks_first(tmp_path):
+    from main_bench.evaluation.runner import plan
+
+    sample = Path(__file__).resolve().parents[2] / "episodes" / "sample"
+    _, chunks = plan(EvalSettings(episodes=sample, split="val", agent="baseline:oracle", out=tmp_path / "plan"))
+    scenes = [c.episode_ids[0].split("/")[0] for c in chunks]
+    assert scenes == sorted(scenes) and len({c.weight for c in chunks}) > 1
+    for scene in set(scenes):
+        weights = [c.weight for c, s in zip(chunks, scenes, strict=True) if s == scene]
+        assert weights == sorted(weights, reverse=True)
