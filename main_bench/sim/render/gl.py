@@ -7,8 +7,8 @@ viewport, `viewports`): the poses go up once as per-view instance records and ea
 indirect multi-draw with a command per view (or per visible cell run), the viewport index chosen in the vertex
 shader; or view by view (OpenGL 3.3): the view's record bound from a uniform buffer and its viewport set. The
 two give the same images (`tests/sim/test_gl_passes.py`); on llvmpipe and on an NVIDIA H200 the pass per view
-is the faster, and the default (docs/evaluation.md). The framebuffer and the per-view buffers are made once and reused; a step
-allocates only its output arrays and, in one pass, its small command list.
+is the faster, and the default (docs/evaluation.md). The framebuffer and the per-view buffers are made once and
+reused; a step allocates only its output arrays and, in one pass, its small command list.
 
 The scene is baked once: unindexed triangles deduplicated into an indexed vertex buffer, ordered by grid cell
 for culling (`culling.CellCuller`, used only for batches of at least CULL_MIN_TRIANGLES faces), with a fixed
