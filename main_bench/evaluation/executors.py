@@ -223,9 +223,9 @@ class LocalWorkers:
                 p.terminate()
         for p in self.procs:
             p.join(timeout=10)
-        with contextlib.suppress(Exception):
+        with contextlib.suppress(Exception):  # the workers have exited: what they sent is in the pipe already
             while True:
-                kind, value = self.results.get(timeout=0.05)
+                kind, value = self.results.get(block=False)
                 if kind == "exit":
                     self.cpu_seconds += float(value)
         for q in (*self.jobs, self.results):
