@@ -351,14 +351,13 @@ def locate_near(points, nodes, x0, y0, cs, nx, ny, col_start, z, below, above, r
 
 
 @njit(cache=True)
-def _ring_column(c, v0, v1, px, py, pz, z, allowed, x0, y0, cs, nx, best, bestd):
-    # the nearest allowed node of column c (cell centres at surface height) if nearer than bestd (squared)
-    jx = c % nx
-    jy = c // nx
+def _ring_column(jx, jy, px, py, pz, z, col_start, allowed, x0, y0, cs, nx, best, bestd):
+    # the nearest allowed node of column (jx, jy) (cell centres at surface height) if nearer than bestd (squared)
     hx = x0 + (jx + 0.5) * cs - px
     hy = y0 + (jy + 0.5) * cs - py
     h2 = hx * hx + hy * hy
-    for v in range(v0, v1):
+    c = jy * nx + jx
+    for v in range(col_start[c], col_start[c + 1]):
         if not allowed[v]:
             continue
         dz = z[v] - pz
@@ -404,9 +403,7 @@ def nearest_cells(points, x0, y0, cs, nx, col_start, z, allowed, box, bound):
                 if jy < by0 or jy > by1:
                     continue
                 for jx in range(max(cx - r, bx0), min(cx + r, bx1) + 1):
-                    c = jy * nx + jx
-                    best, bestd = _ring_column(c, col_start[c], col_start[c + 1], px, py, pz, z, allowed, x0, y0,
-                                               cs, nx, best, bestd)
+                    best, bestd = _ring_column(jx, jy, px, py, pz, z, col_start, allowed, x0, y0, cs, nx, best, bestd)
                 if r == 0:
                     break
             if r == 0:
@@ -415,9 +412,7 @@ def nearest_cells(points, x0, y0, cs, nx, col_start, z, allowed, box, bound):
                 if jx < bx0 or jx > bx1:
                     continue
                 for jy in range(max(cy - r + 1, by0), min(cy + r - 1, by1) + 1):
-                    c = jy * nx + jx
-                    best, bestd = _ring_column(c, col_start[c], col_start[c + 1], px, py, pz, z, allowed, x0, y0,
-                                               cs, nx, best, bestd)
+                    best, bestd = _ring_column(jx, jy, px, py, pz, z, col_start, allowed, x0, y0, cs, nx, best, bestd)
         out[i] = best
     return out
 

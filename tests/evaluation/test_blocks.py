@@ -49,7 +49,6 @@ def test_a_run_of_another_chunking_rule_is_a_different_evaluation(tmp_path):
     assert identity["chunking"] == CHUNKING == 2
 
 
-
 def test_blocks_split_by_weight_and_idle_workers_take_the_light_ends():
     """Blocks hold about equal agent-episodes; with the planner's order (a scene's heaviest chunks first), what
     an idle worker takes from the end of another block is a light chunk."""

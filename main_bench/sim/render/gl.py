@@ -258,6 +258,11 @@ class GLDeviceMissing(GLUnavailable):
     """The EGL device asked for (`device_index`) does not exist on this machine."""
 
 
+def _no_such_device(exc: Exception, device_index: int | None) -> bool:
+    """Whether glcontext refused `device_index` because EGL lists no such device."""
+    return device_index is not None and "device index" in str(exc)
+
+
 def _context(device_index: int | None):
     """A standalone moderngl context through EGL, on device `device_index` (None: the default display): GL 4.3
     or later where the driver gives it (one-pass rendering needs it; NVIDIA's driver gives exactly the version
@@ -269,11 +274,11 @@ def _context(device_index: int | None):
         try:
             return moderngl.create_standalone_context(backend="egl", require=ONE_PASS_GL, **extra)
         except Exception as exc:  # noqa: BLE001 - no 4.3 context here: the default one below
-            if device_index is not None and "device index" in str(exc):
+            if _no_such_device(exc, device_index):
                 raise
         return moderngl.create_standalone_context(backend="egl", **extra)
     except Exception as exc:  # missing libEGL, no driver, no device: all mean "no gl here"
-        if device_index is not None and "device index" in str(exc):
+        if _no_such_device(exc, device_index):
             raise GLDeviceMissing(str(exc)) from None
         raise GLUnavailable(f"{type(exc).__name__}: {exc}") from None
 
