@@ -105,9 +105,9 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
 
 @njit(cache=True)
 def seed(nbr, px, py, pz, tnode, tpos, ztol):
-    """Start a propagation from the targets: (g, anchor, root, klo, khi, done, hk, hv, size), the state that
-    `settle` advances. g and anchor hold tentative values until a node is done; anchor and root are -1 where
-    unreached."""
+    """Start a propagation from the targets: (g, anchor, root, klo, khi, done, hk, hv, pos, size), the state
+    that `settle` advances. g and anchor hold tentative values until a node is done; anchor and root are -1 where
+    unreached; (hk, hv, pos, size) is the queue (`_graph._heap4_push`)."""
     n = nbr.shape[0]
     g = np.full(n, np.inf)
     anchor = np.full(n, -1, np.int64)
@@ -115,6 +115,7 @@ def seed(nbr, px, py, pz, tnode, tpos, ztol):
     klo = np.full(n, -np.inf)
     khi = np.full(n, np.inf)
     done = np.zeros(n, np.bool_)
+    pos = np.full(n, -1, np.int32)
     cap = 9 * tnode.shape[0] + 1024
     hk = np.empty(cap)
     hv = np.empty(cap, np.int64)
@@ -137,12 +138,12 @@ def seed(nbr, px, py, pz, tnode, tpos, ztol):
             else:
                 klo[u] = -np.inf
                 khi[u] = np.inf
-            size = _heap4_push(hk, hv, size, d, u)
-    return g, anchor, root, klo, khi, done, hk, hv, size
+            size = _heap4_push(hk, hv, pos, size, d, u)
+    return g, anchor, root, klo, khi, done, hk, hv, pos, size
 
 
 @njit(cache=True)
-def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, khi, hk, hv, size):
+def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, khi, hk, hv, pos, size):
     """Seed the targets' first ring of neighbours (after `seed`); returns the queue's new size.
 
     The target node's centre is not the target: its neighbours cannot use the bracket test against it (which
@@ -171,12 +172,12 @@ def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, kh
             anchor[v] = n + j
             klo[v] = (dz - ztol) / dh
             khi[v] = (dz + ztol) / dh
-            size = _heap4_push(hk, hv, size, d, v)
+            size = _heap4_push(hk, hv, pos, size, d, v)
     return size
 
 
 @njit(cache=True)
-def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo, khi, done, hk, hv, size,
+def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo, khi, done, hk, hv, pos, size,
            stops, stats):
     """Advance a propagation (state from `seed` and `seed_ring`) until every node in `stops` (-1 entries
     ignored) is done, or to the end when `stops` is empty. Returns (size, full): the queue's size (0 when every
@@ -199,9 +200,7 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
         if size + 8 > hk.shape[0]:
             return size, True  # the caller grows the queue and calls again (arrays are not reassigned here:
             # a kernel that reassigns them runs about a tenth slower)
-        key, u, size = _heap4_pop(hk, hv, size)
-        if done[u] or key > g[u]:
-            continue
+        _, u, size = _heap4_pop(hk, hv, pos, size)
         done[u] = True
         stats[3] += 1
         s = anchor[u]
@@ -216,69 +215,71 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
             banchor = -1
             blo = 0.0
             bhi = 0.0
-            # 1. through u's anchor, if v sees it
-            hx = sx - px[v]
-            hy = sy - py[v]
-            hz = pz[v] - sz
-            dh = np.sqrt(hx * hx + hy * hy)
-            cand = ds + np.sqrt(dh * dh + hz * hz)
-            if dh > 1e-9 and cand < best:
-                d1, d2 = _bracket(hx, hy)
-                lo = (hz - ztol) / dh
-                hi = (hz + ztol) / dh
-                own = max(abs(hx), abs(hy)) <= 0.5 * cs * (1.0 + 1e-9)  # s lies in v's own cell
-                ok = True
-                blocked = False  # no need to walk the segment: it is blocked, or a later relaxation decides
-                if not own:
-                    for dd in (d1, d2):
-                        if dd < 0:
-                            continue
-                        w = nbr[v, dd]
-                        if w < 0:
-                            ok = False
-                            blocked = dd == d1  # the first cell the segment enters is not linked
-                            break
-                        if w != s and not done[w]:
-                            ok = False
-                            blocked = True  # w settles later and relaxes v again
-                            break
-                        if not (w == s or anchor[w] == s):
-                            ok = False
-                            break
-                        if w != s:
-                            lo = max(lo, klo[w])
-                            hi = min(hi, khi[w])
-                if not (ok and lo <= hi) and not blocked:
-                    # the cheap test fails near shadow edges and ties: walk the segment cell by cell
-                    goal = s if s < n else tnode[s - n]
-                    stats[0] += 1
-                    ok = _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy)
-                    stats[1] += int(dh / cs)
-                    stats[2] += ok
+            # 1. through u's anchor, if v sees it (a v anchored at s already holds exactly that distance)
+            if anchor[v] != s:
+                hx = sx - px[v]
+                hy = sy - py[v]
+                hz = pz[v] - sz
+                dh = np.sqrt(hx * hx + hy * hy)
+                cand = ds + np.sqrt(dh * dh + hz * hz)
+                if dh > 1e-9 and cand < best:
+                    d1, d2 = _bracket(hx, hy)
                     lo = (hz - ztol) / dh
                     hi = (hz + ztol) / dh
-                if ok and lo <= hi:
-                    best = cand
-                    banchor = s
-                    blo = lo
-                    bhi = hi
-            # 2. through u itself as a corner
-            ex = px[v] - px[u]
-            ey = py[v] - py[u]
-            ez = pz[v] - pz[u]
-            eh = np.sqrt(ex * ex + ey * ey)
-            c = g[u] + np.sqrt(eh * eh + ez * ez)
-            if c < best and banchor < 0:
-                best = c
-                banchor = u
-                blo = (ez - ztol) / eh
-                bhi = (ez + ztol) / eh
+                    own = max(abs(hx), abs(hy)) <= 0.5 * cs * (1.0 + 1e-9)  # s lies in v's own cell
+                    ok = True
+                    blocked = False  # no need to walk the segment: it is blocked, or a later relaxation decides
+                    if not own:
+                        for dd in (d1, d2):
+                            if dd < 0:
+                                continue
+                            w = nbr[v, dd]
+                            if w < 0:
+                                ok = False
+                                blocked = dd == d1  # the first cell the segment enters is not linked
+                                break
+                            if w != s and not done[w]:
+                                ok = False
+                                blocked = True  # w settles later and relaxes v again
+                                break
+                            if not (w == s or anchor[w] == s):
+                                ok = False
+                                break
+                            if w != s:
+                                lo = max(lo, klo[w])
+                                hi = min(hi, khi[w])
+                    if not (ok and lo <= hi) and not blocked:
+                        # the cheap test fails near shadow edges and ties: walk the segment cell by cell
+                        goal = s if s < n else tnode[s - n]
+                        stats[0] += 1
+                        ok = _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy)
+                        stats[1] += int(dh / cs)
+                        stats[2] += ok
+                        lo = (hz - ztol) / dh
+                        hi = (hz + ztol) / dh
+                    if ok and lo <= hi:
+                        best = cand
+                        banchor = s
+                        blo = lo
+                        bhi = hi
+            # 2. through u itself as a corner (a v anchored at u already holds exactly that distance)
+            if banchor < 0 and anchor[v] != u:
+                ex = px[v] - px[u]
+                ey = py[v] - py[u]
+                ez = pz[v] - pz[u]
+                eh = np.sqrt(ex * ex + ey * ey)
+                c = g[u] + np.sqrt(eh * eh + ez * ez)
+                if c < best:
+                    best = c
+                    banchor = u
+                    blo = (ez - ztol) / eh
+                    bhi = (ez + ztol) / eh
             if banchor >= 0:
                 g[v] = best
                 anchor[v] = banchor
                 klo[v] = blo
                 khi[v] = bhi
-                size = _heap4_push(hk, hv, size, best, v)
+                size = _heap4_push(hk, hv, pos, size, best, v)
     return size, False
 
 

@@ -47,28 +47,38 @@ def _heap_pop(hk, hv, size):
 
 
 @njit(cache=True)
-def _heap4_push(hk, hv, size, key, val):
-    """Push onto a 4-ary min-heap (keys hk, values hv); returns the new size. Shallower than a binary heap:
-    the distance fields' queue runs about a quarter faster with it."""
-    i = size
+def _heap4_push(hk, hv, pos, size, key, val):
+    """Push `val` with `key` onto a 4-ary min-heap (keys hk, values hv), or lower its key if it is queued
+    (pos[val]: its slot, -1 when not queued); returns the new size. Each value is queued at most once, so no
+    stale entry is ever popped. Shallower than a binary heap: the distance fields' queue runs about a quarter
+    faster with it."""
+    i = pos[val]
+    if i < 0:
+        i = size
+        size += 1
     while i > 0:
         p = (i - 1) >> 2
         if hk[p] <= key:
             break
         hk[i] = hk[p]
         hv[i] = hv[p]
+        pos[hv[i]] = i
         i = p
     hk[i] = key
     hv[i] = val
-    return size + 1
+    pos[val] = i
+    return size
 
 
 @njit(cache=True)
-def _heap4_pop(hk, hv, size):
-    """Pop the smallest key of a 4-ary min-heap: (key, value, new size)."""
+def _heap4_pop(hk, hv, pos, size):
+    """Pop the smallest key of a 4-ary min-heap made by `_heap4_push`: (key, value, new size)."""
     key = hk[0]
     val = hv[0]
+    pos[val] = -1
     size -= 1
+    if size == 0:
+        return key, val, size
     lk = hk[size]
     lv = hv[size]
     i = 0
@@ -86,9 +96,11 @@ def _heap4_pop(hk, hv, size):
             break
         hk[i] = mk
         hv[i] = hv[m]
+        pos[hv[i]] = i
         i = m
     hk[i] = lk
     hv[i] = lv
+    pos[lv] = i
     return key, val, size
 
 

@@ -47,13 +47,13 @@ class DistanceField:
         self._tpos_surface = tpos.copy()
         self._tpos_surface[:, 2] = g.z[safe]
         links = navmesh._links32()
-        g_, anchor, root, klo, khi, done, hk, hv, size = _field.seed(links, navmesh._ax, navmesh._ay, g.zs, nodes,
-                                                                      self._tpos, LINE_Z_TOLERANCE)
+        g_, anchor, root, klo, khi, done, hk, hv, pos, size = _field.seed(links, navmesh._ax, navmesh._ay, g.zs,
+                                                                           nodes, self._tpos, LINE_Z_TOLERANCE)
         size = _field.seed_ring(links, navmesh._ax, navmesh._ay, g.zs, nodes, self._tpos, LINE_Z_TOLERANCE,
-                                g.cell_size, navmesh._px, navmesh._py, g_, anchor, klo, khi, hk, hv, size)
+                                g.cell_size, navmesh._px, navmesh._py, g_, anchor, klo, khi, hk, hv, pos, size)
         self._g, self._anchor, self._root = g_, anchor, root
         #: the propagation's remaining state (slopes, settled flags, queue); None once every node is settled
-        self._open: tuple | None = (klo, khi, done, hk, hv, size)
+        self._open: tuple | None = (klo, khi, done, hk, hv, pos, size)
         #: (segment walks, cells walked, walks that saw, nodes settled) so far
         self.stats = np.zeros(4, np.int64)
 
@@ -62,7 +62,7 @@ class DistanceField:
         distances are then those of a whole-field run, which is only ever run as far as look-ups need."""
         if self._open is None or not (finish or len(nodes)):
             return
-        klo, khi, done, hk, hv, size = self._open
+        klo, khi, done, hk, hv, pos, size = self._open
         if not finish and bool(done[nodes[nodes >= 0]].all()):
             return  # the common case on an agent's step: its cell is already settled (no kernel call)
         nm = self.navmesh
@@ -71,12 +71,12 @@ class DistanceField:
         while True:
             size, full = _field.settle(nm._links32(), nm._ax, nm._ay, g.zs, self.target_nodes, self._tpos,
                                        LINE_Z_TOLERANCE, g.cell_size, nm._px, nm._py, self._g, self._anchor,
-                                       self._root, klo, khi, done, hk, hv, size, stops, self.stats)
+                                       self._root, klo, khi, done, hk, hv, pos, size, stops, self.stats)
             if not full:
                 break
             hk = np.concatenate([hk, np.empty(len(hk) + 8)])  # the queue doubles: numpy, not the kernel
             hv = np.concatenate([hv, np.empty(len(hv) + 8, np.int64)])
-        self._open = None if size == 0 else (klo, khi, done, hk, hv, size)
+        self._open = None if size == 0 else (klo, khi, done, hk, hv, pos, size)
 
     def complete(self) -> DistanceField:
         """Settle every reachable cell now (look-ups otherwise settle only as far as they need); returns self."""
@@ -88,7 +88,7 @@ class DistanceField:
         """Memory held by the field's per-cell arrays and, until it is complete, its propagation state (bytes)."""
         held = self._g.nbytes + self._anchor.nbytes + self._root.nbytes
         if self._open is not None:
-            held += sum(a.nbytes for a in self._open[:5])
+            held += sum(a.nbytes for a in self._open[:6])
         return held
 
     @property
