@@ -110,8 +110,8 @@ def seed(nbr, px, py, pz, tnode, tpos, ztol):
     unreached; (hk, hv, pos, size) is the queue (`_graph._heap4_push`)."""
     n = nbr.shape[0]
     g = np.full(n, np.inf)
-    anchor = np.full(n, -1, np.int64)
-    root = np.full(n, -1, np.int64)
+    anchor = np.full(n, -1, np.int32)
+    root = np.full(n, -1, np.int32)
     klo = np.full(n, -np.inf)
     khi = np.full(n, np.inf)
     done = np.zeros(n, np.bool_)
@@ -216,12 +216,14 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
             blo = 0.0
             bhi = 0.0
             # 1. through u's anchor, if v sees it (a v anchored at s already holds exactly that distance)
-            if anchor[v] != s:
+            far = anchor[v] == s  # v is already as near as a path through s makes it
+            if not far:
                 hx = sx - px[v]
                 hy = sy - py[v]
                 hz = pz[v] - sz
                 dh = np.sqrt(hx * hx + hy * hy)
                 cand = ds + np.sqrt(dh * dh + hz * hz)
+                far = cand >= best
                 if dh > 1e-9 and cand < best:
                     d1, d2 = _bracket(hx, hy)
                     lo = (hz - ztol) / dh
@@ -262,8 +264,9 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
                         banchor = s
                         blo = lo
                         bhi = hi
-            # 2. through u itself as a corner (a v anchored at u already holds exactly that distance)
-            if banchor < 0 and anchor[v] != u:
+            # 2. through u itself as a corner: never shorter than through u's anchor s (the triangle inequality),
+            # so only worth it where v does not see s; a v anchored at u already holds exactly that distance
+            if banchor < 0 and not far and anchor[v] != u:
                 ex = px[v] - px[u]
                 ey = py[v] - py[u]
                 ez = pz[v] - pz[u]
@@ -419,8 +422,11 @@ def nearest_cells(points, x0, y0, cs, nx, col_start, z, allowed, box, bound):
 
 
 @njit(cache=True)
-def lookup(points, nodes, g, anchor, root, px, py, pz, z, tpos, tsurf, x0, y0, cs, ix, iy):
+def lookup(points, cells, nodes, g, anchor, root, px, py, pz, z, tpos, tsurf, x0, y0, cs, ix, iy):
     """Distance from each point through its node's anchor; inf for nodes -1 or unreached.
+
+    cells: each point's cell (indexes z, ix, iy); nodes: the same cell's propagation index (indexes g, anchor,
+    root and the anchor points px, py, pz), -1 where none.
 
     Never less than the straight line from the point (clamped into its cell, at its surface height z) to the
     target its path ends at (tsurf): smoothed heights on stairs must not make a path shorter than that.
@@ -435,9 +441,10 @@ def lookup(points, nodes, g, anchor, root, px, py, pz, z, tpos, tsurf, x0, y0, c
         s = anchor[v]
         if s < 0:
             continue
+        c = cells[i]
         # the point, clamped into its node's cell, at the node's (smoothed) height
-        qx = min(max(points[i, 0], x0 + ix[v] * cs), x0 + (ix[v] + 1) * cs)
-        qy = min(max(points[i, 1], y0 + iy[v] * cs), y0 + (iy[v] + 1) * cs)
+        qx = min(max(points[i, 0], x0 + ix[c] * cs), x0 + (ix[c] + 1) * cs)
+        qy = min(max(points[i, 1], y0 + iy[c] * cs), y0 + (iy[c] + 1) * cs)
         sx, sy, sz = _anchor_pos(s, n, px, py, pz, tpos)
         ds = 0.0 if s >= n else g[s]
         dx = qx - sx
@@ -447,6 +454,6 @@ def lookup(points, nodes, g, anchor, root, px, py, pz, z, tpos, tsurf, x0, y0, c
         j = root[v]
         ex = qx - tsurf[j, 0]
         ey = qy - tsurf[j, 1]
-        ez = z[v] - tsurf[j, 2]
+        ez = z[c] - tsurf[j, 2]
         out[i] = max(d, np.sqrt(ex * ex + ey * ey + ez * ez))
     return out

@@ -7,6 +7,7 @@ answer does not depend on how far the field had run before it (nodes settle in t
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -20,6 +21,55 @@ if TYPE_CHECKING:
 LINE_Z_TOLERANCE = 0.01
 #: Points off the navmesh are snapped to the nearest navigable cell within this horizontal distance (m).
 SNAP_RADIUS = 0.5
+
+
+#: Side (cells) of the square tiles a field's propagation numbers its cells by (see `FieldSpace`).
+FIELD_TILE = 16
+
+
+@dataclass(frozen=True)
+class FieldSpace:
+    """A navmesh's cells renumbered tile by tile for the field kernels, made once per navmesh.
+
+    The propagation reads each settled cell's neighbours: numbered by rows, the rows above and below lie a whole
+    row of cells away in every array; numbered by `FIELD_TILE` x `FIELD_TILE` tiles (row by row within a tile,
+    the levels of a column in their order), most of them share the cell's cache lines. On the 612,000-cell
+    building this takes about a tenth off a whole-island field; the distances are the same.
+
+    order[k]: the cell that field index k stands for; index[c]: the field index of cell c. links, ax, ay, zs, px,
+    py: the navmesh's links (int32, in field indices; -1 where none), distance points, smoothed heights and cell
+    centres, in field order.
+    """
+
+    order: np.ndarray
+    index: np.ndarray
+    links: np.ndarray
+    ax: np.ndarray
+    ay: np.ndarray
+    zs: np.ndarray
+    px: np.ndarray
+    py: np.ndarray
+
+    @classmethod
+    def of(cls, navmesh: NavMesh) -> FieldSpace:
+        """The field space of `navmesh` (use `NavMesh._field_space()`, which keeps it)."""
+        g = navmesh._grid
+        n = len(g.z)
+        tiles = (g.iy.astype(np.int64) // FIELD_TILE) * (g.nx // FIELD_TILE + 1) + g.ix.astype(np.int64) // FIELD_TILE
+        order = np.lexsort((np.arange(n), g.ix % FIELD_TILE, g.iy % FIELD_TILE, tiles)).astype(np.int32)
+        index = np.empty(n, np.int32)
+        index[order] = np.arange(n, dtype=np.int32)
+        nbr = g.nbr[order]
+        links = np.where(nbr >= 0, index[np.maximum(nbr, 0)], -1).astype(np.int32)
+        return cls(order=order, index=index, links=np.ascontiguousarray(links),
+                   ax=np.ascontiguousarray(navmesh._ax[order]), ay=np.ascontiguousarray(navmesh._ay[order]),
+                   zs=np.ascontiguousarray(g.zs[order]), px=np.ascontiguousarray(navmesh._px[order]),
+                   py=np.ascontiguousarray(navmesh._py[order]))
+
+    def to_field(self, cells: np.ndarray) -> np.ndarray:
+        """Field indices (int64) of cells; -1 stays -1."""
+        cells = np.asarray(cells, dtype=np.int64)
+        return np.where(cells >= 0, self.index[np.maximum(cells, 0)], -1).astype(np.int64)
 
 
 class DistanceField:
@@ -46,11 +96,14 @@ class DistanceField:
         self._tpos = np.ascontiguousarray(tpos)
         self._tpos_surface = tpos.copy()
         self._tpos_surface[:, 2] = g.z[safe]
-        links = navmesh._links32()
-        g_, anchor, root, klo, khi, done, hk, hv, pos, size = _field.seed(links, navmesh._ax, navmesh._ay, g.zs,
-                                                                           nodes, self._tpos, LINE_Z_TOLERANCE)
-        size = _field.seed_ring(links, navmesh._ax, navmesh._ay, g.zs, nodes, self._tpos, LINE_Z_TOLERANCE,
-                                g.cell_size, navmesh._px, navmesh._py, g_, anchor, klo, khi, hk, hv, pos, size)
+        sp = self._space = navmesh._field_space()
+        #: the targets' nodes in field indices (-1 where off the navmesh)
+        self._tnodes = sp.to_field(nodes)
+        g_, anchor, root, klo, khi, done, hk, hv, pos, size = _field.seed(sp.links, sp.ax, sp.ay, sp.zs, self._tnodes,
+                                                                           self._tpos, LINE_Z_TOLERANCE)
+        size = _field.seed_ring(sp.links, sp.ax, sp.ay, sp.zs, self._tnodes, self._tpos, LINE_Z_TOLERANCE,
+                                g.cell_size, sp.px, sp.py, g_, anchor, klo, khi, hk, hv, pos, size)
+        #: per field index (`FieldSpace`): distance, anchor (a field index, or N + target), target reached
         self._g, self._anchor, self._root = g_, anchor, root
         #: the propagation's remaining state (slopes, settled flags, queue); None once every node is settled
         self._open: tuple | None = (klo, khi, done, hk, hv, pos, size)
@@ -58,20 +111,20 @@ class DistanceField:
         self.stats = np.zeros(4, np.int64)
 
     def _settle(self, nodes: np.ndarray, finish: bool) -> None:
-        """Settle the propagation until every node in `nodes` is done (to its end with `finish`): the nodes'
-        distances are then those of a whole-field run, which is only ever run as far as look-ups need."""
+        """Settle the propagation until every node in `nodes` (field indices) is done (to its end with `finish`):
+        the nodes' distances are then those of a whole-field run, which is only ever run as far as look-ups need."""
         if self._open is None or not (finish or len(nodes)):
             return
         klo, khi, done, hk, hv, pos, size = self._open
         if not finish and bool(done[nodes[nodes >= 0]].all()):
             return  # the common case on an agent's step: its cell is already settled (no kernel call)
-        nm = self.navmesh
-        g = nm._grid
+        g = self.navmesh._grid
+        sp = self._space
         stops = np.zeros(0, np.int64) if finish else np.ascontiguousarray(nodes, dtype=np.int64)
         while True:
-            size, full = _field.settle(nm._links32(), nm._ax, nm._ay, g.zs, self.target_nodes, self._tpos,
-                                       LINE_Z_TOLERANCE, g.cell_size, nm._px, nm._py, self._g, self._anchor,
-                                       self._root, klo, khi, done, hk, hv, pos, size, stops, self.stats)
+            size, full = _field.settle(sp.links, sp.ax, sp.ay, sp.zs, self._tnodes, self._tpos, LINE_Z_TOLERANCE,
+                                       g.cell_size, sp.px, sp.py, self._g, self._anchor, self._root, klo, khi,
+                                       done, hk, hv, pos, size, stops, self.stats)
             if not full:
                 break
             hk = np.concatenate([hk, np.empty(len(hk) + 8)])  # the queue doubles: numpy, not the kernel
@@ -99,7 +152,7 @@ class DistanceField:
     def cell_distances(self) -> np.ndarray:
         """(C,) geodesic distance (m) from each navigable cell centre (`NavMesh.cells()` order); inf if unreached."""
         self.complete()
-        return self._g.copy()
+        return self._g[self._space.index]
 
     def distance(self, points: np.ndarray) -> np.ndarray | float:
         """Geodesic distance (m) from each point to the nearest target; inf where unreachable.
@@ -112,9 +165,11 @@ class DistanceField:
         pts = np.ascontiguousarray(np.atleast_2d(pts))
         nm = self.navmesh
         g = nm._grid
-        nodes = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
+        cells = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
+        nodes = self._space.to_field(cells)
         self._settle(nodes, finish=False)
-        d = _field.lookup(pts, nodes, self._g, self._anchor, self._root, nm._ax, nm._ay, g.zs, g.z,
+        sp = self._space
+        d = _field.lookup(pts, cells, nodes, self._g, self._anchor, self._root, sp.ax, sp.ay, sp.zs, g.z,
                           self._tpos, self._tpos_surface, g.x0, g.y0, g.cell_size, g.ix, g.iy)
         return float(d[0]) if single else d
 
@@ -123,24 +178,26 @@ class DistanceField:
         p = np.asarray(point, dtype=np.float64).reshape(1, 3)
         nm = self.navmesh
         g = nm._grid
-        node = int(nm._nodes_of(p, snap_radius=SNAP_RADIUS)[0])
+        cell = int(nm._nodes_of(p, snap_radius=SNAP_RADIUS)[0])
+        sp = self._space
+        node = int(sp.to_field(np.array([cell]))[0])
         self._settle(np.array([node], np.int64), finish=False)
         if node < 0 or self._anchor[node] < 0:
             return np.zeros((0, 3))
         n = len(g.z)
         cs = g.cell_size
         start = np.array([
-            min(max(p[0, 0], g.x0 + g.ix[node] * cs), g.x0 + (g.ix[node] + 1) * cs),
-            min(max(p[0, 1], g.y0 + g.iy[node] * cs), g.y0 + (g.iy[node] + 1) * cs),
-            g.z[node],
+            min(max(p[0, 0], g.x0 + g.ix[cell] * cs), g.x0 + (g.ix[cell] + 1) * cs),
+            min(max(p[0, 1], g.y0 + g.iy[cell] * cs), g.y0 + (g.iy[cell] + 1) * cs),
+            g.z[cell],
         ])
         out = [start]
         a = int(self._anchor[node])
         while a < n:
-            out.append(np.array([nm._ax[a], nm._ay[a], g.z[a]]))
+            out.append(np.array([sp.ax[a], sp.ay[a], g.z[sp.order[a]]]))
             a = int(self._anchor[a])
         out.append(self._tpos_surface[a - n])
-        return _keep_on_navmesh(nm, _dedupe(np.array(out)), int(g.island[node]))
+        return _keep_on_navmesh(nm, _dedupe(np.array(out)), int(g.island[cell]))
 
 
 def _keep_on_navmesh(nm: NavMesh, path: np.ndarray, island: int, rounds: int = 4) -> np.ndarray:

@@ -17,7 +17,7 @@ from ..errors import NavMeshError
 from ..io import atomic_path
 from . import _field
 from .build import ALGORITHM_VERSION, Grid, build_grid, column_starts, find_floors
-from .field import SNAP_RADIUS, DistanceField
+from .field import SNAP_RADIUS, DistanceField, FieldSpace
 from .settings import NavMeshSettings
 
 #: Version of the navmesh file layout (2: links stored relative to their node, 0 for none: 25x smaller files;
@@ -129,7 +129,7 @@ class NavMesh:
         self._floor_z = np.array([f.z for f in self.floors])
         self.islands: tuple[Island, ...] = self._make_islands()
         self._snap_sets: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self._nbr32: np.ndarray | None = None
+        self._space: FieldSpace | None = None
 
     # ----------------------------------------------------------------- building and files
     @classmethod
@@ -405,11 +405,12 @@ class NavMesh:
                         axis=1)
 
     # ----------------------------------------------------------------- geodesics
-    def _links32(self) -> np.ndarray:
-        """The cell links as int32, made once: distance fields run about a tenth faster on half the bytes."""
-        if self._nbr32 is None:
-            self._nbr32 = self._grid.nbr.astype(np.int32)
-        return self._nbr32
+    def _field_space(self) -> FieldSpace:
+        """The cells as the distance fields number them (`FieldSpace`), made once: tile by tile, links as int32
+        (the propagation runs about a tenth faster on half the bytes, and a tenth faster again by tiles)."""
+        if self._space is None:
+            self._space = FieldSpace.of(self)
+        return self._space
 
     def distance_field(self, targets: np.ndarray) -> DistanceField:
         """Distances to the nearest of targets (3,) or (M, 3), computed once for any number of look-ups.
