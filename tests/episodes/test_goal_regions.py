@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from ep_scenes import _box, room_meshes, write_scene
@@ -62,6 +65,27 @@ def test_visibility_kernel_against_a_single_wall():
     eyes = np.array([[0.0, 0.0, 1.0], [1.5, 0.0, 1.0], [2.5, 0.0, 0.5], [0.0, 40.0, 1.0]])
     # behind the wall / in front of it / inside the box / far off where the wall's triangle does not reach
     assert sees_box(eyes, lo, hi, wall).tolist() == [False, True, True, True]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="counts threads in /proc/self/task (Linux)")
+def test_visibility_kernel_starts_no_threads():
+    """`episodes generate` scales by worker processes: a thread pool per process (numba's prange kernels run on
+    OpenMP here) spins against the other workers."""
+    code = (
+        "import os, numpy as np\n"
+        "from main_bench.episodes.visibility import sees_box\n"
+        "wall = np.array([[[1.0, -5.0, 0.0], [1.0, 5.0, 0.0], [1.0, 0.0, 5.0]]])\n"
+        "eyes = np.random.default_rng(0).uniform(-3, 3, (5000, 3))\n"
+        "from numba import njit\n"
+        "njit(lambda x: x + 1)(1)  # numba's own start-up (it loads scipy's BLAS, which has its threads)\n"
+        "before = len(os.listdir('/proc/self/task'))\n"
+        "seen = sees_box(eyes, np.array([2.0, -0.5, 0.0]), np.array([3.0, 0.5, 1.0]), wall)\n"
+        "print(before, len(os.listdir('/proc/self/task')), int(seen.sum()))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    before, after, seen = (int(x) for x in out)
+    assert after == before
+    assert 0 < seen < 5000
 
 
 def test_point_region_is_the_geodesic_disc(tmp_path):
