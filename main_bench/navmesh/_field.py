@@ -422,6 +422,16 @@ def nearest_cells(points, x0, y0, cs, nx, col_start, z, allowed, box, bound):
 
 
 @njit(cache=True)
+def field_index(index, cells):
+    """The propagation index of each cell (`FieldSpace.index`); -1 stays -1."""
+    out = np.empty(cells.shape[0], np.int64)
+    for i in range(cells.shape[0]):
+        c = cells[i]
+        out[i] = index[c] if c >= 0 else -1
+    return out
+
+
+@njit(cache=True)
 def lookup(points, cells, nodes, g, anchor, root, px, py, pz, z, tpos, tsurf, x0, y0, cs, ix, iy):
     """Distance from each point through its node's anchor; inf for nodes -1 or unreached.
 

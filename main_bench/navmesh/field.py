@@ -68,8 +68,7 @@ class FieldSpace:
 
     def to_field(self, cells: np.ndarray) -> np.ndarray:
         """Field indices (int64) of cells; -1 stays -1."""
-        cells = np.asarray(cells, dtype=np.int64)
-        return np.where(cells >= 0, self.index[np.maximum(cells, 0)], -1).astype(np.int64)
+        return _field.field_index(self.index, np.asarray(cells, dtype=np.int64).reshape(-1))
 
 
 class DistanceField:
