@@ -54,17 +54,21 @@ class FieldSpace:
     def of(cls, navmesh: NavMesh) -> FieldSpace:
         """The field space of `navmesh` (use `NavMesh._field_space()`, which keeps it)."""
         g = navmesh._grid
-        n = len(g.z)
         tiles = (g.iy.astype(np.int64) // FIELD_TILE) * (g.nx // FIELD_TILE + 1) + g.ix.astype(np.int64) // FIELD_TILE
-        order = np.lexsort((np.arange(n), g.ix % FIELD_TILE, g.iy % FIELD_TILE, tiles)).astype(np.int32)
-        index = np.empty(n, np.int32)
-        index[order] = np.arange(n, dtype=np.int32)
+        return cls.numbered(navmesh, np.lexsort((np.arange(len(g.z)), g.ix % FIELD_TILE, g.iy % FIELD_TILE, tiles)))
+
+    @classmethod
+    def numbered(cls, navmesh: NavMesh, order: np.ndarray) -> FieldSpace:
+        """The cells of `navmesh` numbered by `order` (order[k]: the cell of field index k, a permutation)."""
+        g = navmesh._grid
+        order = np.asarray(order).astype(np.int32)
+        index = np.empty(len(order), np.int32)
+        index[order] = np.arange(len(order), dtype=np.int32)
         nbr = g.nbr[order]
-        links = np.where(nbr >= 0, index[np.maximum(nbr, 0)], -1).astype(np.int32)
-        return cls(order=order, index=index, links=np.ascontiguousarray(links),
-                   ax=np.ascontiguousarray(navmesh._ax[order]), ay=np.ascontiguousarray(navmesh._ay[order]),
-                   zs=np.ascontiguousarray(g.zs[order]), px=np.ascontiguousarray(navmesh._px[order]),
-                   py=np.ascontiguousarray(navmesh._py[order]))
+        links = _field.field_index(index, np.ascontiguousarray(nbr.reshape(-1), dtype=np.int64)).reshape(nbr.shape)
+        return cls(order=order, index=index, links=links.astype(np.int32), ax=np.ascontiguousarray(navmesh._ax[order]),
+                   ay=np.ascontiguousarray(navmesh._ay[order]), zs=np.ascontiguousarray(g.zs[order]),
+                   px=np.ascontiguousarray(navmesh._px[order]), py=np.ascontiguousarray(navmesh._py[order]))
 
     def to_field(self, cells: np.ndarray) -> np.ndarray:
         """Field indices (int64) of cells; -1 stays -1."""
@@ -164,10 +168,10 @@ class DistanceField:
         pts = np.ascontiguousarray(np.atleast_2d(pts))
         nm = self.navmesh
         g = nm._grid
-        cells = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
-        nodes = self._space.to_field(cells)
-        self._settle(nodes, finish=False)
         sp = self._space
+        cells = nm._nodes_of(pts, snap_radius=SNAP_RADIUS)
+        nodes = sp.to_field(cells)
+        self._settle(nodes, finish=False)
         d = _field.lookup(pts, cells, nodes, self._g, self._anchor, self._root, sp.ax, sp.ay, sp.zs, g.z,
                           self._tpos, self._tpos_surface, g.x0, g.y0, g.cell_size, g.ix, g.iy)
         return float(d[0]) if single else d

@@ -11,12 +11,8 @@ from main_bench.sim.synthetic import box_house
 
 
 def _identity_space(nm: NavMesh) -> FieldSpace:
-    """The same arrays numbered by cells (rows), as the fields ran before the tiles."""
-    n = len(nm.cells())
-    order = np.arange(n, dtype=np.int32)
-    return FieldSpace(order=order, index=order.copy(), links=nm._grid.nbr.astype(np.int32),
-                      ax=nm._ax.copy(), ay=nm._ay.copy(), zs=nm._grid.zs.copy(), px=nm._px.copy(),
-                      py=nm._py.copy())
+    """The cells numbered by rows, as the fields ran before the tiles."""
+    return FieldSpace.numbered(nm, np.arange(len(nm.cells())))
 
 
 def _answers(nm: NavMesh, targets: np.ndarray, queries: np.ndarray) -> list[np.ndarray]:
