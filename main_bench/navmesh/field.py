@@ -212,23 +212,26 @@ def _keep_on_navmesh(nm: NavMesh, path: np.ndarray, island: int, rounds: int = 4
     """
     step = 0.125 * nm.cell_size
     for _ in range(rounds):
-        out = [path[0]]
-        changed = False
-        for p, q in zip(path[:-1], path[1:], strict=True):
-            k = max(2, int(np.linalg.norm(q[:2] - p[:2]) / step) + 2)
-            t = np.linspace(0.0, 1.0, k)[1:-1, None]
-            dense = p + t * (q - p)
-            if len(dense):
-                bad = np.flatnonzero(~nm.is_navigable(dense))
-                if len(bad):
-                    fix = nm.snap(dense[bad[len(bad) // 2]], island=island)[0]
-                    if np.isfinite(fix).all():
-                        out.append(fix)
-                        changed = True
-            out.append(q)
-        path = _dedupe(np.array(out))
-        if not changed:
+        if len(path) < 2:
             break
+        # every segment's interior samples, about step apart, in one array (as np.linspace(0, 1, k)[1:-1] each)
+        ab = path[1:] - path[:-1]
+        k = np.maximum(2, (np.sqrt(ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]) / step).astype(np.int64) + 2)
+        seg = np.repeat(np.arange(len(ab)), k - 2)
+        j = np.arange(len(seg)) - np.repeat(np.cumsum(k - 2) - (k - 2), k - 2) + 1
+        t = j * (1.0 / (k[seg] - 1))
+        dense = path[:-1][seg] + t[:, None] * ab[seg]
+        bad = np.flatnonzero(~nm.is_navigable(dense)) if len(dense) else np.zeros(0, np.int64)
+        if not len(bad):
+            break
+        # each segment with samples off the navmesh gets the nearest navigable point to its middle bad sample
+        hit, first, count = np.unique(seg[bad], return_index=True, return_counts=True)
+        fixes = nm.snap(dense[bad[first + count // 2]], island=island)
+        good = np.isfinite(fixes).all(axis=1)
+        if not good.any():
+            break
+        out = np.insert(path, hit[good] + 1, fixes[good], axis=0)
+        path = _dedupe(out)
     return path
 
 

@@ -149,3 +149,22 @@ def test_no_walkable_surface_names_the_settings():
         NavMeshSettings(max_slope=95)
     with pytest.raises(NavMeshError, match="unknown navmesh settings"):
         NavMeshSettings.from_json({"agent_radius": 0.1, "bogus": 1})
+
+
+def test_a_segment_off_the_navmesh_gets_one_waypoint_in_place(pillar):
+    """`_keep_on_navmesh`, per round: each segment whose samples (every cell_size / 8) leave the navmesh gets the
+    navigable point nearest its middle off-navmesh sample, inserted in place; other segments stay as they are."""
+    from main_bench.navmesh.field import _keep_on_navmesh
+
+    nm = pillar
+    path = np.array([[1.0, 1.0, 0.0], [1.0, 2.5, 0.0], [5.0, 2.5, 0.0], [5.0, 4.0, 0.0]])  # the middle one: through
+    once = _keep_on_navmesh(nm, path, island=0, rounds=1)  # the pillar
+    assert len(once) == 5 and np.array_equal(once[[0, 1, 3, 4]], path)
+    step = 0.125 * nm.cell_size
+    dense = path[1] + np.linspace(0.0, 1.0, int(4.0 / step) + 2)[1:-1, None] * (path[2] - path[1])
+    bad = np.flatnonzero(~nm.is_navigable(dense))
+    assert len(bad) > 10
+    assert np.array_equal(once[2], nm.snap(dense[bad[len(bad) // 2]], island=0)[0])
+    assert nm.is_navigable(once[2:3])[0]
+    clear = path[[0, 1]]
+    assert np.array_equal(_keep_on_navmesh(nm, clear, island=0), clear)
