@@ -33,6 +33,21 @@ def write_entry(out: Path, chunk: Chunk, paths: list[Path]) -> None:
     atomic_write_json(chunk.ledger_path(out), {"schema_version": LEDGER_SCHEMA_VERSION, "files": files})
 
 
+def remove_unfinished_writes(out: Path) -> list[Path]:
+    """Delete the temporary files of part and ledger writes that never finished (`io.atomic_path` names them
+    `.part-<k>....` beside the file; a SIGKILL mid-write leaves one) under `out`; returns what was removed. Run
+    before an evaluation resumes: such a file is no result, and `verify_results` refuses part files that
+    `summary.json` does not list."""
+    removed = []
+    for kind in (*PART_KINDS, "ledger"):
+        base = Path(out) / kind
+        for path in sorted(base.rglob(".part-*")) if base.is_dir() else ():
+            if path.is_file():
+                path.unlink()
+                removed.append(path)
+    return removed
+
+
 def verified_files(out: Path, chunks: list[Chunk]) -> dict[str, str]:
     """`{relative path: sha256}` of every finished chunk's part files, each checked against its ledger entry;
     a file changed or removed since the evaluator wrote it raises `ResultsError` naming it."""

@@ -73,6 +73,6 @@ def write_part(root: Path, kind: str, split: str, task: str, agents: int, part: 
     schema = RECORD_SCHEMA if kind == "records" else TRAJECTORY_SCHEMA
     table = table.cast(schema)
     path = partition_dir(root, kind, split, task, agents) / f"part-{part:05d}.parquet"
-    with atomic_path(path, suffix=".parquet") as tmp:
+    with atomic_path(path, suffix=".parquet.tmp") as tmp:  # a killed write leaves no `*.parquet`
         pq.write_table(table, tmp, compression="zstd", row_group_size=50_000)
     return path

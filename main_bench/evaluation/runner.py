@@ -19,7 +19,7 @@ from ..errors import DatasetError, ResultsError, SubmissionError
 from ..io import atomic_write_json, read_json
 from .baselines import privileged_baseline
 from .chunks import Chunk, make_chunks
-from .ledger import verified_files
+from .ledger import remove_unfinished_writes, verified_files
 from .scoring.task_rules import rules_json
 from .settings import EvalSettings, SubmissionMeta
 
@@ -176,6 +176,7 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
     settings = replace(settings, submission=meta)
     out = Path(settings.out)
     _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
+    remove_unfinished_writes(out)  # a killed run's half-written temporaries; its finished chunks are kept
     pending = [c for c in chunks if not c.finished(out)]
     skipped = len(chunks) - len(pending)
     if progress is not None:
