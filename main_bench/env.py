@@ -91,7 +91,7 @@ class MainParallelEnv(ParallelEnv):
         from dataclasses import replace
 
         from .episodes.dataset import load_episodes, read_manifest
-        from .evaluation.resources import EpisodeResources
+        from .evaluation.run.resources import EpisodeResources
         from .evaluation.scoring.task_rules import max_steps_of, sim_settings_from_manifest
 
         if track not in TRACKS:

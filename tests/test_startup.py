@@ -18,7 +18,7 @@ def test_cli_import_leaves_heavy_libraries_alone():
 
 def test_an_evaluation_worker_imports_no_scene_or_table_library():
     """A worker reads cached scenes and baked surfaces and writes part files with pyarrow alone."""
-    code = ("import json, sys, main_bench.evaluation.worker; "
+    code = ("import json, sys, main_bench.evaluation.run.worker; "
             "print(json.dumps([m for m in ('trimesh', 'scipy', 'pandas', 'matplotlib', 'torch') if m in sys.modules]))")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
     assert json.loads(res.stdout) == []
@@ -34,7 +34,7 @@ def test_the_command_line_forks_its_evaluation_workers_light():
     sample = Path(__file__).resolve().parents[1] / "episodes" / "sample"
     code = ("import json, sys, main_bench.cli.app, main_bench.cli.evaluate, main_bench.evaluation.runner; "
             "from main_bench.episodes.dataset import read_manifest; "
-            "from main_bench.evaluation.worker import load_kernels; "
+            "from main_bench.evaluation.run.worker import load_kernels; "
             "from main_bench.worker_threads import fork_is_safe; "
             f"load_kernels(read_manifest({str(sample)!r})); "
             "print(json.dumps([fork_is_safe(), [m for m in ('trimesh', 'scipy.spatial', 'matplotlib', 'torch', "

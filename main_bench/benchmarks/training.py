@@ -121,7 +121,7 @@ def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int =
 
     totals = {"render": 0.0, "physics": 0.0}
     trainer = Trainer(TrainSettings(**base, backend="inline", workers=0), workdir / "inline")
-    import main_bench.evaluation.resources as resources
+    import main_bench.evaluation.run.resources as resources
 
     original = resources.EpisodeResources.simulator
 

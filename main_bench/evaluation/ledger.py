@@ -21,7 +21,7 @@ from ..errors import ResultsError
 from ..io import atomic_write_json, check_schema_version, read_json, sha256_file
 
 if TYPE_CHECKING:
-    from .chunks import Chunk
+    from .run.chunks import Chunk
 
 LEDGER_SCHEMA_VERSION = 1
 PART_KINDS: tuple[str, ...] = ("records", "trajectories")

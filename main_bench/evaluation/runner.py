@@ -18,8 +18,8 @@ from .. import __version__
 from ..errors import DatasetError, ResultsError, SubmissionError
 from ..io import atomic_write_json, read_json
 from .baselines import privileged_baseline
-from .chunks import Chunk, make_chunks
 from .ledger import remove_unfinished_writes, verified_files
+from .run.chunks import Chunk, make_chunks
 from .scoring.task_rules import rules_json
 from .settings import EvalSettings, SubmissionMeta
 
@@ -159,7 +159,7 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
             require_sandbox()
     pool = None
     if settings.executor == "local" and settings.workers > 1:
-        from .executors import LocalWorkers
+        from .run.executors import LocalWorkers
 
         pool = LocalWorkers(settings, settings.workers - 1)  # they start up while this process plans; it works too
     try:
@@ -197,7 +197,7 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
                 progress.advance(value.episodes, value.agent_steps)
 
     if pending:
-        from . import executors
+        from .run import executors
 
         if settings.executor == "ray":
             executors.run_ray(settings, pending, settings.workers, on_message)

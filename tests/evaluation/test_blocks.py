@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from main_bench.evaluation.chunks import make_chunks
-from main_bench.evaluation.executors import Blocks
+from main_bench.evaluation.run.chunks import make_chunks
+from main_bench.evaluation.run.executors import Blocks
 
 
 def _chunks(n_ids: int, size: int):

@@ -315,7 +315,7 @@ def test_workers_started_before_planning_stop_on_bad_input(tiny_dataset, tmp_pat
 
 
 def test_a_started_pool_runs_the_chunks_it_is_given(reference, tiny_dataset, tmp_path):
-    from main_bench.evaluation.executors import LocalWorkers
+    from main_bench.evaluation.run.executors import LocalWorkers
     from main_bench.evaluation.runner import plan
 
     out = tmp_path / "pool"

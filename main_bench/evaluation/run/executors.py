@@ -17,9 +17,9 @@ import traceback
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from ..worker_threads import fork_is_safe, single_threaded_children
+from ...worker_threads import fork_is_safe, single_threaded_children
+from ..settings import EvalSettings
 from .chunks import Chunk
-from .settings import EvalSettings
 from .worker import WorkerContext
 
 OnMessage = Callable[[str, Any], None]
@@ -110,13 +110,13 @@ class LocalWorkers:
         if warm:
             context = mp.get_context("fork")
             with contextlib.suppress(Exception):  # best effort: bad input is reported by the planner, next
-                from ..episodes.dataset import read_manifest
+                from ...episodes.dataset import read_manifest
                 from .worker import load_kernels
 
                 load_kernels(read_manifest(settings.episodes))
         else:
             context = mp.get_context("forkserver")
-            context.set_forkserver_preload(["main_bench.evaluation.worker"])
+            context.set_forkserver_preload(["main_bench.evaluation.run.worker"])
         self.settings = settings
         self.n = n
         #: CPU seconds the workers reported when they exited.
@@ -255,7 +255,7 @@ def run_ray(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_me
     try:
         import ray
     except ImportError:
-        from ..errors import InputError
+        from ...errors import InputError
 
         raise InputError("--executor ray needs Ray: pip install 'main-bench[ray]'") from None
     started = False

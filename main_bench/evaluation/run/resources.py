@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from ..episodes.schema import Episode
-from .episode_loop import target_key
+from ...episodes.schema import Episode
+from ..episode_loop import target_key
 
 #: Memory (MiB) of the target distance fields kept, least recently used dropped first (they are rebuilt on a
 #: miss; results do not depend on this). A field is counted as made: 65 bytes per navmesh cell with its open
@@ -44,8 +44,8 @@ class EpisodeResources:
     def scene(self, scene_id: str) -> tuple[Any, Any]:
         """(Scene, NavMesh) of `scene_id`: the navmesh is the one stored in the data set (`load_navmesh`)."""
         if scene_id not in self._scenes:
-            from ..episodes.dataset import load_navmesh, resolve_scene
-            from ..scenes.cache import load_scene_geometry
+            from ...episodes.dataset import load_navmesh, resolve_scene
+            from ...scenes.cache import load_scene_geometry
 
             entry = self.manifest.scenes.get(scene_id)
             path = resolve_scene(self.manifest, scene_id, self.cache_dir)
@@ -56,7 +56,7 @@ class EpisodeResources:
     def _navmesh_cache(self) -> Path:
         if self.cache_dir is not None:
             return self.cache_dir / "navmesh"
-        from ..scenes.builtin import default_cache_dir
+        from ...scenes.builtin import default_cache_dir
 
         return Path(default_cache_dir()) / "navmesh"
 
@@ -65,7 +65,7 @@ class EpisodeResources:
         if scene_id in self._sims:
             self._sims.move_to_end(scene_id)
         else:
-            from ..sim import Simulator
+            from ...sim import Simulator
 
             scene, navmesh = self.scene(scene_id)
             self._sims[scene_id] = Simulator(scene, navmesh, self.sim_settings, seed=self.seed)
@@ -76,7 +76,7 @@ class EpisodeResources:
     def _plan_navmesh(self, scene_id: str) -> Any:
         """The privileged baselines' planning navmesh: the data set's, eroded by `PLAN_MARGIN` more."""
         if scene_id not in self._plan_navmeshes:
-            from ..navmesh import NavMesh
+            from ...navmesh import NavMesh
 
             scene, _ = self.scene(scene_id)
             nav = self.manifest.navmesh()
@@ -88,7 +88,7 @@ class EpisodeResources:
         """Each agent's distance field to its target's stored success region (on the planning navmesh when
         `planning`: to the region's points that lie on it, so a planned path ends inside the region; None where
         none does)."""
-        from ..episodes.goals import decode_cells, region_field
+        from ...episodes.goals import decode_cells, region_field
 
         _, navmesh = self.scene(episode.scene_id)
         out = []
@@ -98,7 +98,7 @@ class EpisodeResources:
                 self._fields.move_to_end(key)
             else:
                 if i >= len(episode.target_regions):
-                    from ..errors import DatasetError
+                    from ...errors import DatasetError
 
                     raise DatasetError(f"episode {episode.episode_id!r} stores no success region for agent {i}; "
                                        "regenerate the data set", path=self.manifest.root)

@@ -17,17 +17,17 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from ..episodes.schema import Episode
-from ..errors import DatasetError, PolicyFailure
-from . import ledger
-from .baselines import privileged_baseline
+from ...episodes.schema import Episode
+from ...errors import DatasetError, PolicyFailure
+from .. import ledger
+from ..baselines import privileged_baseline
+from ..episode_loop import EpisodeFailure, LoopSettings, run_episode
+from ..records import RECORD_SCHEMA, TRAJECTORY_SCHEMA, write_part
+from ..scoring.metrics import EpisodeTrace, episode_metrics
+from ..scoring.task_rules import rules_from_manifest, sim_settings_from_manifest
+from ..settings import EvalSettings
 from .chunks import Chunk
-from .episode_loop import EpisodeFailure, LoopSettings, run_episode
-from .records import RECORD_SCHEMA, TRAJECTORY_SCHEMA, write_part
 from .resources import EpisodeResources
-from .scoring.metrics import EpisodeTrace, episode_metrics
-from .scoring.task_rules import rules_from_manifest, sim_settings_from_manifest
-from .settings import EvalSettings
 
 
 @dataclass(frozen=True)
@@ -48,15 +48,15 @@ class _IsolatedPolicy:
     uses_pixels = True
 
     def __init__(self, settings: EvalSettings, manifest: Any) -> None:
-        from .process.isolation import PolicyProcess
-        from .process.sandbox import evaluation_sandbox
-        from .submission import parse_spec
+        from ..process.isolation import PolicyProcess
+        from ..process.sandbox import evaluation_sandbox
+        from ..submission import parse_spec
 
         sandbox = evaluation_sandbox(settings, manifest)
         self._proc = PolicyProcess(parse_spec(settings.agent), process_limits(settings), settings.seed, sandbox)
 
     def reset(self, info: Any) -> None:
-        from .process.isolation import PolicyError
+        from ..process.isolation import PolicyError
 
         try:
             self._proc.reset(info)
@@ -64,7 +64,7 @@ class _IsolatedPolicy:
             raise EpisodeFailure(exc.reason) from None
 
     def act(self, observations: dict[str, dict]) -> dict[str, int]:
-        from .process.isolation import PolicyError
+        from ..process.isolation import PolicyError
 
         try:
             return self._proc.act(observations)
@@ -79,7 +79,7 @@ class WorkerContext:
     """Runs chunks for one evaluation in this process; `close()` when done."""
 
     def __init__(self, settings: EvalSettings) -> None:
-        from ..episodes.dataset import read_manifest
+        from ...episodes.dataset import read_manifest
 
         self.settings = settings
         self.manifest = read_manifest(settings.episodes)
@@ -95,7 +95,7 @@ class WorkerContext:
     def _policy_for(self) -> Any:
         if self._policy is None:
             if self.settings.mode != "central":
-                from .agents import DecentralizedTeam
+                from ..agents import DecentralizedTeam
 
                 make, self._privileged = agent_endpoints(self.settings, self.manifest)
                 self._policy = DecentralizedTeam(make, self.settings.mode, self.settings.channel_floats,
@@ -111,7 +111,7 @@ class WorkerContext:
     def _episode(self, chunk: Chunk, episode_id: str) -> Episode:
         key = (chunk.task, chunk.agents)
         if key not in self._episodes:
-            from ..episodes.dataset import load_episodes
+            from ...episodes.dataset import load_episodes
 
             eps = load_episodes(self.settings.episodes, chunk.split, chunk.task, chunk.agents)
             self._episodes[key] = {e.episode_id: e for e in eps}
@@ -197,16 +197,16 @@ def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[in
     """(agent index -> endpoint, privileged) for the decentralized modes: the privileged baselines run in this
     process, one restricted instance per agent; a submission runs one `PolicyProcess` per agent, each in the
     evaluation's sandbox."""
-    from .baselines import PRIVILEGED, privileged_baseline
+    from ..baselines import PRIVILEGED, privileged_baseline
 
     if privileged_baseline(settings.agent) is not None:
-        from .baselines.agent import PrivilegedAgent
+        from ..baselines.agent import PrivilegedAgent
 
         kind = next(k for k in PRIVILEGED if settings.agent.strip() == f"baseline:{k}")
         return (lambda i: PrivilegedAgent(kind, i, settings.seed)), True
-    from .agents import ProcessEndpoint
-    from .process.sandbox import evaluation_sandbox
-    from .submission import parse_spec
+    from ..agents import ProcessEndpoint
+    from ..process.sandbox import evaluation_sandbox
+    from ..submission import parse_spec
 
     limits, spec, sandbox = process_limits(settings), parse_spec(settings.agent), evaluation_sandbox(settings, manifest)
     return (lambda i: ProcessEndpoint(spec, limits, settings.seed, sandbox)), False
@@ -215,7 +215,7 @@ def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[in
 def process_limits(settings: EvalSettings) -> Any:
     """The `isolation.Limits` of every policy process of an evaluation (its `--step-seconds`,
     `--episode-seconds`, `--memory-mb`, and `--gpu` as the torch device)."""
-    from .process.isolation import Limits
+    from ..process.isolation import Limits
 
     return Limits(step_seconds=settings.limits.step_seconds, episode_seconds=settings.limits.episode_seconds,
                   memory_mb=settings.limits.memory_mb,
@@ -270,7 +270,7 @@ def load_kernels(manifest: Any) -> None:
     look-up, path and snap on the data set's first navmesh. Caches nothing that an evaluation reads."""
     if not manifest.scenes:
         return
-    from ..episodes.dataset import load_navmesh
+    from ...episodes.dataset import load_navmesh
 
     navmesh = load_navmesh(manifest, min(manifest.scenes))
     cell = navmesh.cells(np.zeros(1, np.int64))
