@@ -4,9 +4,10 @@ A propagation is `seed`, `seed_ring`, then `settle` (resumable: it stops once gi
 
 Every reached node v keeps an anchor s(v): a target or a corner node that v sees in a straight line, and
 g(v) = D(s) + |v - s| (3D, with smoothed heights). Anchors are numbered 0..N-1 for nodes, N+j for target j.
-Visibility is decided by induction: v sees s if its neighbour w one step towards s is linked, settled,
-(both neighbours bracketing the direction to s, if it lies between two) anchored at s (or is s), and the heights along the way stay within `ztol` of one straight line (a slope
-interval [klo, khi] carried from node to node), so lines do not cut through floors, stairs or ramps.
+Visibility is decided by induction: v sees s if its neighbour w one step towards s (both neighbours bracketing
+the direction to s, if it lies between two) is linked, settled and anchored at s (or is s), and the heights
+along the way stay within `ztol` of one straight line (a slope interval [klo, khi] carried from node to node), so
+lines do not cut through floors, stairs or ramps.
 """
 
 from __future__ import annotations

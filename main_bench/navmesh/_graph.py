@@ -50,8 +50,8 @@ def _heap_pop(hk, hv, size):
 def _heap4_push(hk, hv, pos, size, key, val):
     """Push `val` with `key` onto a 4-ary min-heap (keys hk, values hv), or lower its key if it is queued
     (pos[val]: its slot, -1 when not queued; a queued value's key may only go down); returns the new size. Each
-    value is queued at most once, so no stale entry is ever popped. Shallower than a binary heap: the distance fields' queue runs about a quarter
-    faster with it."""
+    value is queued at most once, so no stale entry is ever popped. Shallower than a binary heap: the distance
+    fields' queue runs about a quarter faster with it."""
     i = pos[val]
     if i < 0:
         i = size
