@@ -64,3 +64,19 @@ def test_blocks_split_by_weight_and_idle_workers_take_the_light_ends():
     assert blocks.next(0).weight == 32
     stolen = blocks.next(1)  # worker 1 is done: it takes worker 0's last chunk, a light one
     assert stolen.weight == 8 and stolen.episode_ids[0].startswith("a")
+
+
+def test_chunks_asked_for_ahead_come_from_the_own_block_and_leave_its_last():
+    """A busy worker's look-ahead takes its own block's next chunk but never the last one, which stays for
+    whichever worker is idle first; nothing is ever taken ahead from another block."""
+    chunks = _chunks(48, 8)
+    blocks = Blocks(chunks, 2)
+    assert [c.part for c in blocks.blocks[0]] == [0, 1, 2]
+    assert blocks.next(0, own_only=True).part == 0
+    assert blocks.next(0, own_only=True).part == 1
+    assert blocks.next(0, own_only=True) is None  # part 2 is block 0's last: not handed out ahead
+    for _ in range(3):
+        blocks.next(1)
+    assert blocks.next(1, own_only=True) is None  # block 1 is empty: no stealing ahead
+    assert blocks.next(1).part == 2  # an idle worker 1 takes it
+    assert blocks.next(0) is None

@@ -24,6 +24,9 @@ from .worker import WorkerContext
 
 OnMessage = Callable[[str, Any], None]
 
+#: the answer to a worker's ("ahead", k) when no chunk is handed out ahead: it asks again ("want") once idle
+NONE_AHEAD = False
+
 
 def run_inline(settings: EvalSettings, chunks: Sequence[Chunk], on_message: OnMessage) -> None:
     """Run every chunk in this process, in order."""
@@ -41,13 +44,18 @@ def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any, war
     try:
         ctx = WorkerContext(settings)
         ctx.prepare(kernels=not warm)
-        while True:
-            results.put(("want", wid))
-            chunk = jobs.get()
-            if chunk is None:
-                break
+        results.put(("want", wid))
+        chunk = jobs.get()
+        while chunk is not None:
+            # the next chunk of its own block is asked for now, so it waits for nothing between chunks (the
+            # command hands out chunks from a thread that shares the interpreter lock with its own episodes)
+            results.put(("ahead", wid))
             report = ctx.run_chunk(chunk, lambda steps: results.put(("episode", steps)))
             results.put(("chunk", report))
+            chunk = jobs.get()
+            if chunk is NONE_AHEAD:
+                results.put(("want", wid))
+                chunk = jobs.get()
     except BaseException as exc:  # reported to the parent, which raises it
         try:
             payload = pickle.dumps(exc)
@@ -84,9 +92,13 @@ class Blocks:
             self.blocks[min(n - 1, seen * n // max(total, 1))].append(chunk)
             seen += chunk.weight
 
-    def next(self, worker: int) -> Chunk | None:
-        """The next chunk for `worker`, or None when every chunk has been handed out."""
+    def next(self, worker: int, own_only: bool = False) -> Chunk | None:
+        """The next chunk for `worker`, or None when every chunk has been handed out. With `own_only` (a chunk
+        asked for ahead, while the worker is busy), only from its own block and never its last chunk, which
+        stays for whichever worker is idle first."""
         own = self.blocks[worker]
+        if own_only:
+            return own.pop(0) if len(own) > 1 else None
         if own:
             return own.pop(0)
         richest = max(self.blocks, key=lambda b: sum(c.weight for c in b))
@@ -145,9 +157,9 @@ class LocalWorkers:
                     state["done"] += 1
                 on_message(kind, value)
 
-        def hand_out(worker: int) -> Chunk | None:
+        def hand_out(worker: int, own_only: bool = False) -> Chunk | None:
             with lock:
-                return None if state["stop"] else blocks.next(worker)
+                return None if state["stop"] else blocks.next(worker, own_only)
 
         if not inline:
             self._serve(len(chunks), state, deliver, hand_out, False)
@@ -182,7 +194,7 @@ class LocalWorkers:
         self.finished = True
 
     def _serve(self, total: int, state: dict[str, Any], deliver: OnMessage,
-               hand_out: Callable[[int], Chunk | None], inline: bool) -> None:
+               hand_out: Callable[..., Chunk | None], inline: bool) -> None:
         """Answer the worker processes (chunks on request, their reports to `deliver`) until `total` chunks are
         done (whoever ran them), `state["stop"]`, or (`inline`) every process has exited; raises a worker's
         error."""
@@ -200,6 +212,9 @@ class LocalWorkers:
                 continue
             if kind == "want":
                 self.jobs[value].put(hand_out(value))
+            elif kind == "ahead":
+                chunk = hand_out(value, own_only=True)
+                self.jobs[value].put(NONE_AHEAD if chunk is None and not state["stop"] else chunk)
             elif kind == "error":
                 raise pickle.loads(value)
             elif kind == "exit":
