@@ -11,3 +11,22 @@ def test_startup_and_env_parts_report_their_figures():
     env = e2e.env_resets(60, 1)
     assert env["long_agent_steps_per_s"] > 0 and env["short_agent_steps_per_s"] > 0
     assert env["short_over_long"] > 0 and sum(env["resets_timed"].values()) > 0
+
+
+def test_the_warm_part_runs_its_commands_in_a_server_it_stops(tmp_path, monkeypatch):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    monkeypatch.setenv("MAIN_BENCH_CACHE", str(tmp_path / "cache"))
+    with e2e.warm_server() as env:
+        assert env["MAIN_BENCH_WARM"] == "1"
+        sock = Path(subprocess.run([sys.executable, "-m", "main_bench.cli.warm", "--socket"], env=env,
+                                   capture_output=True, text=True, check=True).stdout.strip())
+        assert sock.exists()
+        row = e2e.evaluate_scaling(tmp_path, ("oracle",), 1, 4, 1, env)["oracle"]
+    assert not sock.exists()
+    assert row["workers_1"]["wall_s"] > 0 and row["workers_2"]["wall_s"] > 0 and row["speedup_2_over_1"] > 0
+    assert row["workers_1"]["cpu_s"] is None  # the server's children are not this process's
+    log = sock.with_suffix(".log").read_text()
+    assert log.count("runs evaluate") == 2 and "--workers 2" in log

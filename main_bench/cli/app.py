@@ -121,8 +121,15 @@ def run() -> None:
     loaded) against 0.03 s. What a normal exit guarantees is kept: other threads are joined, `atexit` handlers
     run (they stop and join child processes and remove temporary folders), standard streams are flushed. Every
     file the toolkit writes is closed (written atomically) before `main` returns. Unexpected errors exit
-    normally, with their traceback."""
-    code = main()
+    normally, with their traceback.
+
+    With `MAIN_BENCH_WARM=1` the command runs in a warm server's forked process when one answers
+    (`cli.warm`), and this process only passes on its streams and exit code."""
+    from .warm import run_warm
+
+    code = run_warm(sys.argv[1:])
+    if code is None:
+        code = main()
     import atexit
     import os
     import threading

@@ -272,7 +272,12 @@ def load_kernels(manifest: Any) -> None:
         return
     from ...episodes.dataset import load_navmesh
 
-    navmesh = load_navmesh(manifest, min(manifest.scenes))
+    warm_kernels(load_navmesh(manifest, min(manifest.scenes)))
+
+
+def warm_kernels(navmesh: Any) -> None:
+    """Load numba's compiled distance-field kernels in this process by one field, look-up, path and snap on
+    `navmesh` (any navmesh: the kernels' argument types do not depend on it)."""
     cell = navmesh.cells(np.zeros(1, np.int64))
     field = navmesh.distance_field(cell)
     field.distance(cell)  # a look-up at the target itself: the field settles one cell, not the island
