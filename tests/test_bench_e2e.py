@@ -30,3 +30,18 @@ def test_the_warm_part_runs_its_commands_in_a_server_it_stops(tmp_path, monkeypa
     assert row["workers_1"]["cpu_s"] is None  # the server's children are not this process's
     log = sock.with_suffix(".log").read_text()
     assert log.count("runs evaluate") == 2 and "--workers 2" in log
+
+
+def test_warm_scaling_reports_both_modes_from_interleaved_runs(monkeypatch, tmp_path):
+    calls = []
+
+    def fake_timed(cmd, env=None):
+        calls.append(("warm" if env else "cold", cmd[cmd.index("--workers") + 1]))
+        return {"wall_s": 10.0 if cmd[cmd.index("--workers") + 1] == "1" else 5.0, "cpu_s": 0.0, "stdout": "{}"}
+
+    monkeypatch.setattr(e2e, "_timed", fake_timed)
+    monkeypatch.setattr(e2e, "warm_server", lambda: __import__("contextlib").nullcontext({"MAIN_BENCH_WARM": "1"}))
+    out = e2e.warm_scaling(tmp_path, 2)
+    assert calls == [("cold", "1"), ("cold", "2"), ("warm", "1"), ("warm", "2")] * 2
+    assert out["warm"]["speedup_2_over_1"] == out["cold"]["median_pair_ratio"] == 2.0
+    assert out["runs"]["warm_workers_2"] == [5.0, 5.0]
