@@ -186,6 +186,7 @@ def _run_remote(conn: Any, args: list[str]) -> int:
     child: dict[str, int] = {}
 
     def forward(signum: int, _frame: Any) -> None:  # to the child's process group, as a terminal would
+        child["signal"] = signum  # kept for when the child's pid comes, if it has not yet
         if "pid" in child:
             with _suppress_os_errors():
                 os.killpg(child["pid"], signum)
@@ -207,6 +208,8 @@ def _run_remote(conn: Any, args: list[str]) -> int:
             buf = buf[5:]
             if kind == b"P":
                 child["pid"] = value
+                if "signal" in child:
+                    forward(child["signal"], None)
             elif kind == b"X":
                 code = value
     if code is None:
@@ -242,12 +245,11 @@ def warm_up() -> None:
 
     from ..evaluation import runner  # noqa: F401
     from ..evaluation.baselines import oracle  # noqa: F401
-    from ..evaluation.run import executors, worker
+    from ..evaluation.run import executors, worker  # noqa: F401
     from ..navmesh import NavMesh
     from ..scenes.loader import Scene
     from . import app  # noqa: F401
 
-    del executors
     boxes = [(0.0, 0.0, -0.1, 4.0, 3.0, 0.0), (1.5, 1.0, 0.0, 2.0, 1.5, 0.8)]
     vertices, faces = [], []
     for x0, y0, z0, x1, y1, z1 in boxes:
@@ -386,11 +388,11 @@ def _run_child(conn: Any, request: dict[str, Any], fds: list[int]) -> None:
 
     code = 1
     try:
-        conn.sendall(b"P" + struct.pack("!i", os.getpid()))
+        os.setsid()  # its own process group, which the client signals once it knows the pid
         for sig in (signal.SIGTERM, signal.SIGHUP):
             signal.signal(sig, signal.SIG_DFL)
         signal.signal(signal.SIGINT, signal.default_int_handler)
-        os.setsid()
+        conn.sendall(b"P" + struct.pack("!i", os.getpid()))
         for target, fd in enumerate(fds):
             os.dup2(fd, target)
             os.close(fd)
