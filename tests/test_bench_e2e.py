@@ -45,3 +45,17 @@ def test_warm_scaling_reports_both_modes_from_interleaved_runs(monkeypatch, tmp_
     assert calls == [("cold", "1"), ("cold", "2"), ("warm", "1"), ("warm", "2")] * 2
     assert out["warm"]["speedup_2_over_1"] == out["cold"]["median_pair_ratio"] == 2.0
     assert out["runs"]["warm_workers_2"] == [5.0, 5.0]
+
+
+def test_the_comm_baseline_is_evaluated_as_agent_policies(monkeypatch, tmp_path):
+    commands = []
+
+    def fake_timed(cmd, env=None):
+        commands.append(cmd)
+        return {"wall_s": 1.0, "cpu_s": 1.0, "stdout": '{"episodes_run": 8, "workers_forked": true}'}
+
+    monkeypatch.setattr(e2e, "_timed", fake_timed)
+    e2e.evaluate_scaling(tmp_path, ("oracle", "comm"), None, 8, 1)
+    comm = [c for c in commands if "baseline:comm" in c]
+    assert len(comm) == 2 and all(c[c.index("--mode") + 1] == "comm" and "--limit" in c for c in comm)
+    assert not any("--mode" in c for c in commands if "baseline:oracle" in c)

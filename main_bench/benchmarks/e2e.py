@@ -128,6 +128,8 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                        f"baseline:{name}", "--out", str(dest), "--workers", str(workers), "--no-progress", "--json"]
                 if lim is not None:
                     cmd += ["--limit", str(lim)]
+                if name == "comm":  # an agent policy: one process per agent, messages counted
+                    cmd += ["--mode", "comm"]
                 run = _timed(cmd, env)
                 doc = json.loads(run["stdout"])
                 run["episodes"] = doc["episodes_run"]
