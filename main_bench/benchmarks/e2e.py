@@ -72,6 +72,12 @@ def _cli() -> list[str]:
     return [sys.executable, "-m", "main_bench.cli.app"]
 
 
+def _evaluate_cmd(baseline: str, out: Path, *extra: str) -> list[str]:
+    """`main-bench evaluate` of `baseline:<baseline>` on the sample's val split into `out`, with `extra` options."""
+    return [*_cli(), "evaluate", "--episodes", str(_sample()), "--split", "val", "--agent", f"baseline:{baseline}",
+            "--out", str(out), *extra, "--no-progress", "--json"]
+
+
 def startup(repeats: int) -> dict[str, Any]:
     """Median wall seconds of `--help`, of importing the CLI, and of a bare interpreter."""
     cmds = {"help": [*_cli(), "--help"], "import_cli": [sys.executable, "-c", "import main_bench.cli.app"],
@@ -124,8 +130,7 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
         for rep in range(repeats):
             for workers in (1, 2):
                 dest = workdir / f"eval-{name}-{workers}-{rep}"
-                cmd = [*_cli(), "evaluate", "--episodes", str(_sample()), "--split", "val", "--agent",
-                       f"baseline:{name}", "--out", str(dest), "--workers", str(workers), "--no-progress", "--json"]
+                cmd = _evaluate_cmd(name, dest, "--workers", str(workers))
                 if lim is not None:
                     cmd += ["--limit", str(lim)]
                 if name == "comm":  # an agent policy: one process per agent, messages counted
@@ -157,9 +162,7 @@ def warm_scaling(workdir: Path, repeats: int) -> dict[str, Any]:
             for mode, mode_env in (("cold", None), ("warm", env)):
                 for workers in (1, 2):
                     dest = workdir / f"warm-scaling-{mode}-{workers}"
-                    run = _timed([*_cli(), "evaluate", "--episodes", str(_sample()), "--split", "val", "--agent",
-                                  "baseline:oracle", "--out", str(dest), "--workers", str(workers), "--no-progress",
-                                  "--json"], mode_env)
+                    run = _timed(_evaluate_cmd("oracle", dest, "--workers", str(workers)), mode_env)
                     runs.setdefault(f"{mode}_workers_{workers}", []).append(round(run["wall_s"], 3))
                     shutil.rmtree(dest, ignore_errors=True)
     out: dict[str, Any] = {"runs": runs}
@@ -178,9 +181,7 @@ def first_episode(workdir: Path, repeats: int, env: dict[str, str] | None = None
     runs = []
     for rep in range(repeats):
         dest = workdir / f"first-{rep}"
-        runs.append(_timed([*_cli(), "evaluate", "--episodes", str(_sample()), "--split", "val", "--agent",
-                            "baseline:oracle", "--out", str(dest), "--limit", "1", "--task", "shared", "--agents",
-                            "2", "--no-progress", "--json"], env))
+        runs.append(_timed(_evaluate_cmd("oracle", dest, "--limit", "1", "--task", "shared", "--agents", "2"), env))
         if env is not None:
             runs[-1]["cpu_s"] = None
         shutil.rmtree(dest, ignore_errors=True)
