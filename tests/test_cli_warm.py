@@ -78,6 +78,21 @@ def test_the_key_follows_the_code_and_the_environment_but_not_the_folder(tmp_pat
     assert server_key(package, env) != key2
 
 
+def test_the_key_follows_installed_packages_but_not_files_in_the_working_folder(tmp_path, monkeypatch):
+    package, work, site = tmp_path / "pkg", tmp_path / "work", tmp_path / "site"
+    for folder in (package, work, site):
+        folder.mkdir()
+    monkeypatch.setattr(sys, "path", [str(work), str(site)])
+    env = {"HOME": "/home/u"}
+    key = server_key(package, env)
+    (work / "notes.txt").write_text("x")  # a file made in the working folder (sys.path[0]) between two commands
+    os.utime(work, ns=(1, 1))
+    assert server_key(package, env) == key
+    (site / "new_package").mkdir()  # a package installed
+    os.utime(site, ns=(2, 2))
+    assert server_key(package, env) != key
+
+
 def test_commands_run_in_the_warm_server_with_the_same_results_and_exit_codes(warm_env, tmp_path):
     env, sock = warm_env
     args = ["evaluate", "--episodes", str(SAMPLE), "--split", "val", "--agent", "baseline:oracle", "--task", "shared",

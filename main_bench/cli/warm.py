@@ -14,8 +14,8 @@ client's own process.
   its socket file is removed or replaced. Each server's log is `<socket>.log` beside it.
 
 A server answers only clients whose key matches: the toolkit's files (paths, sizes, modification times), the
-Python interpreter and its `sys.path`, the modification times of the folders on it (a `pip install` changes
-them) and the whole environment but for `PWD`, `OLDPWD`, `SHLVL`, `_` and `MAIN_BENCH_WARM`. So edited code, a
+Python interpreter and its `sys.path`, the modification times of the folders on it but the first (a `pip
+install` changes them; the first is the working or the script's folder) and the whole environment but for `PWD`, `OLDPWD`, `SHLVL`, `_` and `MAIN_BENCH_WARM`. So edited code, a
 changed package or another variable gets a fresh server. Imports nothing heavy: the console script imports it for every command.
 """
 
@@ -40,8 +40,8 @@ _STARTING_S = 60.0
 
 def server_key(package: Path | None = None, environ: dict[str, str] | None = None) -> str:
     """Hex digest naming the server that may run this process's commands: it covers the toolkit's files under
-    `package` (default: this installation's), the interpreter, `sys.path` with each folder's modification time,
-    and `environ` (default: this process's) but for `_IGNORED_VARIABLES`."""
+    `package` (default: this installation's), the interpreter, `sys.path` with each folder's modification time
+    (but the first's: the working or the script's folder), and `environ` (default: this process's) but for `_IGNORED_VARIABLES`."""
     import hashlib
 
     package = Path(__file__).resolve().parents[1] if package is None else Path(package)
@@ -51,9 +51,9 @@ def server_key(package: Path | None = None, environ: dict[str, str] | None = Non
         st = path.stat()
         digest.update(f"{path.relative_to(package)}\0{st.st_size}\0{st.st_mtime_ns}\n".encode())
     digest.update(f"{sys.executable}\0{sys.version}\0{os.getuid()}\n".encode())
-    for entry in sys.path:
-        try:
-            mtime = os.stat(entry or ".").st_mtime_ns
+    for k, entry in enumerate(sys.path):
+        try:  # not sys.path[0]'s time: the working or the script's folder, whose files come and go all the time
+            mtime = os.stat(entry or ".").st_mtime_ns if k else 0
         except OSError:
             mtime = -1
         digest.update(f"{entry}\0{mtime}\n".encode())
