@@ -10,7 +10,8 @@ region holding every segment are tested, so a query costs (viewpoints x nearby t
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..jit import njit
 
 #: A segment stops this far (m) before the point where it enters the box, so a triangle lying on the box's
 #: surface (the object's own face) does not count as in the way.

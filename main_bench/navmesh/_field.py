@@ -13,8 +13,8 @@ lines do not cut through floors, stairs or ramps.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ._graph import _heap4_pop, _heap4_push
 
 

@@ -7,7 +7,8 @@ wall lying on a cell boundary belongs to exactly one column). Directions 0..7: E
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..jit import njit
 
 DX = np.array([1, 0, -1, 0, 1, -1, -1, 1], dtype=np.int64)
 DY = np.array([0, 1, 0, -1, 1, 1, -1, -1], dtype=np.int64)
