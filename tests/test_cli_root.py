@@ -74,3 +74,44 @@ def test_usage_errors_are_one_line_exit_2(cli, args, message):
 def test_bare_command_prints_help(cli):
     r = cli()
     assert r.code == 2 and "Usage" in r.out and "scenes" in r.out
+
+
+def test_an_interrupt_inside_a_numba_kernel_is_an_interrupt():
+    """A SIGINT that lands while a kernel runs comes back from numba as a SystemError chained to the
+    KeyboardInterrupt; the command still says "interrupted" in one line and exits 130. Any other SystemError is
+    a bug and keeps its traceback."""
+    code = """
+import signal, sys
+import numpy as np
+from main_bench.cli import app
+from main_bench.jit import njit
+
+@njit
+def spin(n):
+    s = 0.0
+    for i in range(n):
+        s += np.sqrt(i * 1.0)
+    return np.full(4, s), s
+
+def busy(*args, **kwargs):  # stands in for a command busy in a kernel
+    try:
+        for _ in range(100000):
+            spin(3000000)
+    except BaseException as exc:
+        print(type(exc).__name__)
+        raise
+
+def broken(*args, **kwargs):
+    raise SystemError("not an interrupt")
+
+spin(10)
+app.app = busy if sys.argv[1] == "busy" else broken
+signal.signal(signal.SIGALRM, signal.default_int_handler)
+signal.setitimer(signal.ITIMER_REAL, 0.3)
+sys.exit(app.main([]))
+"""
+    busy = subprocess.run([sys.executable, "-c", code, "busy"], capture_output=True, text=True, timeout=300)
+    assert busy.stdout.strip() == "SystemError", busy.stdout + busy.stderr
+    assert (busy.returncode, busy.stderr) == (130, "main-bench: interrupted\n")
+    broken = subprocess.run([sys.executable, "-c", code, "broken"], capture_output=True, text=True, timeout=300)
+    assert broken.returncode == 1 and "SystemError: not an interrupt" in broken.stderr

@@ -112,7 +112,26 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         typer.echo("main-bench: interrupted", err=True)
         return 130
+    except SystemError as exc:
+        if not _interrupted(exc):
+            raise
+        typer.echo("main-bench: interrupted", err=True)
+        return 130
     return 0
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether `exc` comes of an interrupt: an interrupt that lands while a numba kernel runs surfaces as a
+    `SystemError` ("returned a result with an exception set") whose cause, one or two levels down, is the
+    `KeyboardInterrupt`."""
+    seen: BaseException | None = exc
+    for _ in range(8):
+        if seen is None:
+            return False
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
 
 
 def run() -> None:
