@@ -133,7 +133,10 @@ def test_commands_run_in_the_warm_server_with_the_same_results_and_exit_codes(wa
     _wait_for(lambda: "exits" in _log_of(other_sock), 20, "the other server to exit")
 
 
-def test_an_interrupt_reaches_the_command_and_its_workers(warm_env, tmp_path):
+@pytest.mark.parametrize("how", ["SIGINT", "SIGKILL"])
+def test_an_interrupt_or_a_killed_client_stops_the_command_and_its_workers(warm_env, tmp_path, how):
+    """SIGINT is passed on to the command's process group; a client killed outright (it cannot pass anything on)
+    closes its connection, and the command's process group is hung up as a closing terminal would."""
     env, sock = warm_env
     _cli(["--help"], env)  # starts the server
     _wait_for(lambda: "listening on" in _log_of(sock), 120, "the warm server to listen")
@@ -145,17 +148,23 @@ def test_an_interrupt_reaches_the_command_and_its_workers(warm_env, tmp_path):
         _wait_for(lambda: list((tmp_path / "out" / "records").rglob("*.parquet")), 120, "a first finished chunk")
         child = int(_wait_for(lambda: [ln.split()[1] for ln in _log_of(sock).splitlines()
                                        if ln.startswith("child") and "--workers 2" in ln], 10, "the child")[0])
-        proc.send_signal(signal.SIGINT)
+        workers = [int(p) for p in Path(f"/proc/{child}/task/{child}/children").read_text().split()]
+        assert workers, "the command's worker processes"
+        proc.send_signal(getattr(signal, how))
         _, err = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
-    # as on its own: the command stops its workers and exits 130 (also when the interrupt lands inside a numba
-    # kernel, which turns it into a SystemError)
-    assert proc.returncode == 130, err
+    if how == "SIGINT":  # as on its own: the command stops its workers and exits 130
+        assert proc.returncode == 130, err
+    else:
+        assert proc.returncode == -signal.SIGKILL
     assert not (tmp_path / "out" / "summary.json").exists()
-    _wait_for(lambda: not Path(f"/proc/{child}").exists() or "Z" in Path(f"/proc/{child}/stat").read_text().split()[2],
-              20, "the command's process to end")
+
+    def ended(pid: int) -> bool:
+        return not Path(f"/proc/{pid}").exists() or "Z" in Path(f"/proc/{pid}/stat").read_text().split()[2]
+
+    _wait_for(lambda: all(ended(p) for p in [child, *workers]), 30, "the command's processes to end")
 
 
 def test_a_stale_socket_is_replaced_and_an_idle_server_exits(tmp_path):

@@ -13,6 +13,9 @@ client's own process.
   can open; peers of another user are refused), fork one child per request, exit after `idle_s` seconds without a request or once
   its socket file is removed or replaced. Each server's log is `<socket>.log` beside it.
 
+Signals the client gets (SIGINT, SIGTERM, SIGHUP) reach the command's process group; a client killed outright
+(SIGKILL) closes its connection, and the command's process group is then hung up (SIGHUP).
+
 A server answers only clients whose key matches: the toolkit's files (paths, sizes, modification times), the
 Python interpreter and its `sys.path`, the modification times of the folders on it but the first (a `pip
 install` changes them; the first is the working or the script's folder) and the whole environment but for `PWD`, `OLDPWD`, `SHLVL`, `_` and `MAIN_BENCH_WARM`. So edited code, a
@@ -392,6 +395,7 @@ def _run_child(conn: Any, request: dict[str, Any], fds: list[int]) -> None:
         for sig in (signal.SIGTERM, signal.SIGHUP):
             signal.signal(sig, signal.SIG_DFL)
         signal.signal(signal.SIGINT, signal.default_int_handler)
+        _hang_up_with_client(conn)
         conn.sendall(b"P" + struct.pack("!i", os.getpid()))
         for target, fd in enumerate(fds):
             os.dup2(fd, target)
@@ -425,6 +429,29 @@ def _run_child(conn: Any, request: dict[str, Any], fds: list[int]) -> None:
         with _suppress_os_errors():
             conn.sendall(b"X" + struct.pack("!i", int(code)))
         os._exit(int(code))
+
+
+def _hang_up_with_client(conn: Any) -> None:
+    """In the forked child: have the kernel signal this process (SIGIO) when something happens on `conn`; once
+    the client's end is closed (the client died without passing a signal on, say by SIGKILL), hang up this
+    process group as a closing terminal would (SIGHUP: the command and its workers end)."""
+    import fcntl
+    import signal
+    import socket
+
+    def client_gone(_signum: int, _frame: Any) -> None:
+        try:
+            gone = conn.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b""  # the client never sends again
+        except BlockingIOError:
+            gone = False
+        except OSError:
+            gone = True
+        if gone:
+            os.killpg(os.getpgrp(), signal.SIGHUP)
+
+    signal.signal(signal.SIGIO, client_gone)
+    fcntl.fcntl(conn.fileno(), fcntl.F_SETOWN, os.getpid())
+    fcntl.fcntl(conn.fileno(), fcntl.F_SETFL, fcntl.fcntl(conn.fileno(), fcntl.F_GETFL) | os.O_ASYNC)
 
 
 def _suppress_os_errors() -> Any:
