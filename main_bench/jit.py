@@ -22,7 +22,7 @@ __all__ = ["njit", "import_numpy_support"]
 
 def import_numpy_support() -> bool:
     """Import `numba.np.arraymath` with `scipy.linalg` hidden (once per process; a no-op when either is loaded
-    already). Returns whether it hid it. Not for a moment when another thread may import `scipy.linalg`."""
+    already). Returns whether it hid it. Call it only while no other thread may import `scipy.linalg`."""
     if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
         return False
     sys.modules["scipy.linalg"] = None  # type: ignore[assignment]  # `import scipy.linalg...` now fails fast
