@@ -112,6 +112,29 @@ def check_schema_version(doc: dict[str, Any], expected: int, path: str | Path, w
         )
 
 
+@contextlib.contextmanager
+def folder_lock(folder: str | Path, busy: Callable[[], Exception]) -> Iterator[None]:
+    """Hold an exclusive advisory lock (`flock`) on the existing `folder` for the block; raise `busy()` at once
+    when another process holds it. The kernel drops the lock when its holder dies, so a killed run leaves none
+    behind. Processes forked inside the block share it until they exit. No lock where `fcntl` is missing."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        fcntl = None  # type: ignore[assignment]
+    if fcntl is None:
+        yield
+        return
+    fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise busy() from None
+        yield
+    finally:
+        os.close(fd)
+
+
 def sha256_bytes(data: bytes) -> str:
     """Hex SHA-256 of `data`."""
     return hashlib.sha256(data).hexdigest()

@@ -16,6 +16,7 @@ from main_bench.io import (
     atomic_write_text,
     check_schema_version,
     dumps_json,
+    folder_lock,
     read_json,
     sha256_bytes,
     sha256_file,
@@ -75,3 +76,21 @@ def test_unwritable_output_paths_are_input_errors(tmp_path):
     with pytest.raises(InputError, match="is a folder"):
         atomic_write_text(tmp_path, "x")
     assert a_file.read_text() == "keep"
+
+
+def test_folder_lock_refuses_a_second_holder_and_dies_with_its_holder(tmp_path):
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time; from main_bench.io import folder_lock\n"
+        f"with folder_lock({str(tmp_path)!r}, lambda: RuntimeError('busy')):\n"
+        "    print('held', flush=True); time.sleep(600)")], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(InputError, match="in use"), folder_lock(tmp_path, lambda: InputError("in use")):
+            pass
+    finally:
+        holder.kill()
+        holder.wait(timeout=60)
+    with (folder_lock(tmp_path, lambda: AssertionError("still held after its holder was killed")),
+          pytest.raises(InputError, match="in use"),  # one holder at a time within a process too
+          folder_lock(tmp_path, lambda: InputError("in use"))):
+        pass

@@ -16,7 +16,7 @@ from typing import Any, Protocol
 
 from .. import __version__
 from ..errors import DatasetError, ResultsError, SubmissionError
-from ..io import atomic_write_json, read_json
+from ..io import atomic_write_json, folder_lock, read_json
 from .baselines import privileged_baseline
 from .ledger import remove_unfinished_writes, verified_files
 from .run.chunks import Chunk, make_chunks
@@ -176,6 +176,14 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
     settings = replace(settings, submission=meta)
     out = Path(settings.out)
     _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
+    busy = ResultsError("another evaluation is writing to it now; wait for it to end or give another --out", path=out)
+    with folder_lock(out, lambda: busy):  # two runs in one folder would take each other's files for leftovers
+        return _run(settings, manifest, chunks, out, progress, pool, t0)
+
+
+def _run(settings: EvalSettings, manifest: Any, chunks: list[Chunk], out: Path, progress: ProgressSink | None,
+         pool: Any, t0: float) -> EvaluationOutcome:
+    """`_evaluate`'s steps once the results folder is checked and this run holds it."""
     remove_unfinished_writes(out)  # a killed run's half-written temporaries; its finished chunks are kept
     pending = [c for c in chunks if not c.finished(out)]
     skipped = len(chunks) - len(pending)

@@ -145,6 +145,36 @@ def test_resume_removes_what_a_killed_write_left(reference, tiny_dataset, tmp_pa
         pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
 
 
+def test_a_second_run_into_a_folder_in_use_is_refused_and_touches_nothing(reference, tiny_dataset, tmp_path, cli):
+    """While one evaluation writes into a results folder, another one into it (a second terminal, a re-run
+    started too soon) is refused with one line and exit 2 before it removes anything it would otherwise take
+    for a killed run's leftovers; once the first is done, the same command resumes."""
+    from main_bench.errors import ResultsError
+    from main_bench.io import folder_lock
+
+    out = tmp_path / "busy"
+    shutil.copytree(reference, out)
+    (out / "summary.json").unlink()
+    ledger = out / "ledger" / "split=val" / "task=shared" / "agents=2"
+    (ledger / "part-00001.json").unlink()
+    writing = ledger / ".part-00001.json.inflight.tmp"  # the running evaluation's write in progress
+    writing.write_bytes(b"{")
+    dataset, cache = tiny_dataset
+    args = ["evaluate", "--episodes", dataset, "--split", "val", "--agent", WALKER, "--out", out, "--limit", "4",
+            "--chunk-size", "2", "--cache-dir", cache]
+    with folder_lock(out, lambda: AssertionError("the folder was free")):  # the evaluation running now
+        with pytest.raises(ResultsError, match="another evaluation is writing to it now"):
+            evaluate(_settings(tiny_dataset, out))
+        res = cli(*args)
+        assert res.code == 2 and res.err.count("\n") == 1 and "another evaluation is writing" in res.err, res.err
+        assert writing.read_bytes() == b"{" and not (out / "summary.json").exists()
+    res = cli(*args, "--json")
+    assert res.code == 0, res.err
+    assert json.loads(res.out)["chunks_run"] == 1 and not writing.exists()
+    for kind in ("records", "trajectories"):
+        pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
+
+
 def test_cli_oracle_resumes_finished_run_and_refuses_another(cli, tiny_dataset, tmp_path):
     dataset, cache = tiny_dataset
     out = tmp_path / "oracle"
