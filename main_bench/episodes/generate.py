@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from ..errors import DatasetError, InputError, NavMeshError
-from ..io import atomic_write_json, read_json, sha256_file
+from ..io import atomic_write_json, folder_lock, read_json, sha256_file
 from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, identity
 from .plan import Shard, group_units, plan_shards
 from .settings import GenerationSettings
@@ -189,10 +189,8 @@ def _scene_path(spec: dict[str, Any]) -> Path:
 
 
 def _prepare_out(out: Path, ident: dict, overwrite: bool) -> None:
-    """Create `out`, or accept it for resuming, or clear it (overwrite), or refuse it."""
-    if out.exists() and not out.is_dir():
-        raise InputError("--out must be a folder, this is a file", path=out)
-    if not out.exists() or not any(out.iterdir()):
+    """Accept the folder `out` as new or for resuming, or clear it (overwrite), or refuse it."""
+    if not any(out.iterdir()):
         return
     existing = None
     for name in (MANIFEST_NAME, LOCK_NAME):
@@ -245,28 +243,33 @@ def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], o
     nav_json = navmesh_settings if isinstance(navmesh_settings, dict) else navmesh_settings.to_json()
     scenes = {s.scene_id: s.to_json() for s in sources}
     ident = identity(settings, nav_json, scenes)
-    _prepare_out(out, ident, overwrite)
+    if out.exists() and not out.is_dir():
+        raise InputError("--out must be a folder, this is a file", path=out)
     out.mkdir(parents=True, exist_ok=True)
-    if not (out / LOCK_NAME).is_file() or overwrite:
-        atomic_write_json(out / LOCK_NAME, ident)
-    by_id = {s.scene_id: s for s in sources}
-    shards = plan_shards([(s.scene_id, s.split) for s in sources], settings)
-    specs = [{"out": str(out), "scene_id": unit[0].scene_id, "scene_path": str(by_id[unit[0].scene_id].path),
-              "scene_hash": by_id[unit[0].scene_id].content_hash, "up": by_id[unit[0].scene_id].up,
-              "source": by_id[unit[0].scene_id].source,
-              "settings": settings.to_json(), "navmesh_settings": nav_json,
-              "cache_dir": None if cache_dir is None else str(cache_dir),
-              "shards": [asdict(s) for s in unit]} for unit in group_units(shards)]
-    from .executors import run_units
+    busy = InputError("another run is writing a data set into it now; wait for it to end or choose another --out",
+                      path=out)
+    with folder_lock(out, lambda: busy):  # a second run would delete the first one's shards in progress
+        _prepare_out(out, ident, overwrite)
+        if not (out / LOCK_NAME).is_file() or overwrite:
+            atomic_write_json(out / LOCK_NAME, ident)
+        by_id = {s.scene_id: s for s in sources}
+        shards = plan_shards([(s.scene_id, s.split) for s in sources], settings)
+        specs = [{"out": str(out), "scene_id": unit[0].scene_id, "scene_path": str(by_id[unit[0].scene_id].path),
+                  "scene_hash": by_id[unit[0].scene_id].content_hash, "up": by_id[unit[0].scene_id].up,
+                  "source": by_id[unit[0].scene_id].source,
+                  "settings": settings.to_json(), "navmesh_settings": nav_json,
+                  "cache_dir": None if cache_dir is None else str(cache_dir),
+                  "shards": [asdict(s) for s in unit]} for unit in group_units(shards)]
+        from .executors import run_units
 
-    entries = run_units(run_unit, specs, executor=executor, workers=workers, ray_address=ray_address,
-                        progress=progress)
-    doc = build_manifest(ident, entries)
-    atomic_write_json(out / MANIFEST_NAME, doc)
-    (out / LOCK_NAME).unlink(missing_ok=True)
-    return GenerationReport(
-        out=out, requested=sum(s.count for s in shards), produced=doc["episodes"], shards=len(shards),
-        shards_written=sum(e["written"] for e in entries), shards_reused=sum(not e["written"] for e in entries),
-        shortfalls=tuple(doc["shortfalls"]), episodes_per_scene=doc["episodes_per_scene"],
-        seconds=time.perf_counter() - started, manifest_hash=sha256_file(out / MANIFEST_NAME),
-        point_goal_fallback=doc["point_goal_fallback"])
+        entries = run_units(run_unit, specs, executor=executor, workers=workers, ray_address=ray_address,
+                            progress=progress)
+        doc = build_manifest(ident, entries)
+        atomic_write_json(out / MANIFEST_NAME, doc)
+        (out / LOCK_NAME).unlink(missing_ok=True)
+        return GenerationReport(
+            out=out, requested=sum(s.count for s in shards), produced=doc["episodes"], shards=len(shards),
+            shards_written=sum(e["written"] for e in entries), shards_reused=sum(not e["written"] for e in entries),
+            shortfalls=tuple(doc["shortfalls"]), episodes_per_scene=doc["episodes_per_scene"],
+            seconds=time.perf_counter() - started, manifest_hash=sha256_file(out / MANIFEST_NAME),
+            point_goal_fallback=doc["point_goal_fallback"])

@@ -207,6 +207,28 @@ def test_sigkill_then_rerun_gives_the_uninterrupted_data(gen, tmp_path, ep_scene
     assert leftovers == [], leftovers
 
 
+def test_a_second_run_into_a_folder_in_use_is_refused_and_touches_nothing(gen, tmp_path):
+    """While one run writes a data set into a folder, a second one into it is refused with one line and exit 2
+    before it deletes the first one's shards in progress (which it would take for a killed run's leftovers)."""
+    from main_bench.io import folder_lock
+
+    out = tmp_path / "busy"
+    assert gen(out, "--shard-size", "10").code == 0
+    (out / "manifest.json").rename(out / ".generation.json")  # a run in progress: its identity, a shard being written
+    writing = next(out.glob("split=*/task=*/agents=*/part-*.parquet")).with_name(".part-99999.parquet.inflight.tmp")
+    writing.write_bytes(b"PAR1")
+    before = sorted(p.relative_to(out) for p in out.rglob("*"))
+    with folder_lock(out, lambda: AssertionError("the folder was free")):
+        r = gen(out, "--shard-size", "10")
+        assert r.code == 2 and r.err.count("\n") == 1 and "another run is writing a data set into it" in r.err, r.err
+        r = gen(out, "--shard-size", "10", "--overwrite")
+        assert r.code == 2 and "another run is writing" in r.err
+        assert sorted(p.relative_to(out) for p in out.rglob("*")) == before
+    r = gen(out, "--shard-size", "10")
+    assert r.code == 0, r.err
+    assert not writing.exists() and (out / "manifest.json").is_file() and not (out / ".generation.json").exists()
+
+
 def test_a_node_without_the_built_in_house_generates_it(tmp_path, monkeypatch):
     from main_bench.episodes.generate import _scene_path
     from main_bench.scenes import builtin
