@@ -116,7 +116,8 @@ def check_schema_version(doc: dict[str, Any], expected: int, path: str | Path, w
 def folder_lock(folder: str | Path, busy: Callable[[], Exception]) -> Iterator[None]:
     """Hold an exclusive advisory lock (`flock`) on the existing `folder` for the block; raise `busy()` at once
     when another process holds it. The kernel drops the lock when its holder dies, so a killed run leaves none
-    behind. Processes forked inside the block share it until they exit. No lock where `fcntl` is missing."""
+    behind. Processes forked inside the block share it until they exit. No lock where `fcntl` is missing or
+    the file system has no locks."""
     try:
         import fcntl
     except ImportError:  # not POSIX
@@ -130,6 +131,8 @@ def folder_lock(folder: str | Path, busy: Callable[[], Exception]) -> Iterator[N
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             raise busy() from None
+        except OSError:  # a file system without locks (ENOLCK, EOPNOTSUPP): go on unlocked, as before locks
+            pass
         yield
     finally:
         os.close(fd)

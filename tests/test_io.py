@@ -94,3 +94,17 @@ def test_folder_lock_refuses_a_second_holder_and_dies_with_its_holder(tmp_path):
           pytest.raises(InputError, match="in use"),  # one holder at a time within a process too
           folder_lock(tmp_path, lambda: InputError("in use"))):
         pass
+
+
+def test_folder_lock_goes_on_unlocked_where_the_file_system_has_no_locks(tmp_path, monkeypatch):
+    import errno
+    import fcntl
+
+    def no_locks(fd, op):
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    monkeypatch.setattr(fcntl, "flock", no_locks)
+    ran = []
+    with folder_lock(tmp_path, lambda: AssertionError("refused on a file system without locks")):
+        ran.append(True)
+    assert ran == [True]

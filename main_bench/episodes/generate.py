@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 from ..errors import DatasetError, InputError, NavMeshError
 from ..io import atomic_write_json, folder_lock, read_json, sha256_file
-from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, identity
+from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, folder_in_use, identity
 from .plan import Shard, group_units, plan_shards
 from .settings import GenerationSettings
 from .sources import SceneSource
@@ -246,9 +246,7 @@ def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], o
     if out.exists() and not out.is_dir():
         raise InputError("--out must be a folder, this is a file", path=out)
     out.mkdir(parents=True, exist_ok=True)
-    busy = InputError("another run is writing a data set into it now; wait for it to end or choose another --out",
-                      path=out)
-    with folder_lock(out, lambda: busy):  # a second run would delete the first one's shards in progress
+    with folder_lock(out, lambda: folder_in_use(out)):  # a second run would delete the first one's shards in progress
         _prepare_out(out, ident, overwrite)
         if not (out / LOCK_NAME).is_file() or overwrite:
             atomic_write_json(out / LOCK_NAME, ident)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import gzip
 import json
+import shutil
 import zlib
 from collections import defaultdict
 from pathlib import Path
@@ -21,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DatasetError, InputError
-from ..io import atomic_write_bytes, atomic_write_json, read_json, sha256_file
+from ..io import atomic_write_bytes, atomic_write_json, folder_lock, read_json, sha256_file
 from .goals import decode_cells
-from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, identity, read_manifest
+from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, folder_in_use, identity, read_manifest
 from .sampler import EpisodeBatch
 from .settings import GenerationSettings
 from .targets import Target
@@ -179,25 +180,24 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
             "requested": shard["requested"], "produced": table.num_rows, "reason": "imported from a Habitat export",
             "rejections": {}}
         tables.append((shard, table, report))
-    if out.exists():
-        import shutil
-
+    out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out, lambda: folder_in_use(out)):  # not while another run writes there
         for child in [*out.glob("split=*"), *out.glob("navmesh")]:
             shutil.rmtree(child)
-    atomic_write_json(out / LOCK_NAME, ident)
-    for rel, data in navmeshes.items():
-        atomic_write_bytes(out / rel, data)
-    nav_of = {sid: entry for sid, entry in (doc.get("navmeshes") or {}).items()}
-    entries = []
-    for shard, table, report in tables:
-        path = out / shard["path"]
-        write_shard(table, path, report)
-        entries.append({**shard, "rows": table.num_rows, "sha256": sha256_file(path),
-                        "reason": report.get("reason", ""), "rejections": report.get("rejections", {}),
-                        "point_goals": report.get("point_goals", "")}
-                       | ({"navmesh": nav_of[shard["scene_id"]]} if shard["scene_id"] in nav_of else {}))
-    atomic_write_json(out / MANIFEST_NAME, build_manifest(ident, entries))
-    (out / LOCK_NAME).unlink(missing_ok=True)
+        atomic_write_json(out / LOCK_NAME, ident)
+        for rel, data in navmeshes.items():
+            atomic_write_bytes(out / rel, data)
+        nav_of = {sid: entry for sid, entry in (doc.get("navmeshes") or {}).items()}
+        entries = []
+        for shard, table, report in tables:
+            path = out / shard["path"]
+            write_shard(table, path, report)
+            entries.append({**shard, "rows": table.num_rows, "sha256": sha256_file(path),
+                            "reason": report.get("reason", ""), "rejections": report.get("rejections", {}),
+                            "point_goals": report.get("point_goals", "")}
+                           | ({"navmesh": nav_of[shard["scene_id"]]} if shard["scene_id"] in nav_of else {}))
+        atomic_write_json(out / MANIFEST_NAME, build_manifest(ident, entries))
+        (out / LOCK_NAME).unlink(missing_ok=True)
     return out
 
 

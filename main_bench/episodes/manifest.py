@@ -91,6 +91,12 @@ class Manifest:
         return sum(s.rows for s in self.shards)
 
 
+def folder_in_use(out: Path) -> InputError:
+    """The error for a data set folder that another run (generate, import) is writing into now."""
+    return InputError("another run is writing a data set into it now; wait for it to end or choose another --out",
+                      path=out)
+
+
 def identity(settings: GenerationSettings, navmesh_settings: dict[str, Any], scenes: dict[str, dict],
              navmesh_algorithm: int | None = None) -> dict:
     """What must match for an existing (partial) data set to be resumed rather than refused.

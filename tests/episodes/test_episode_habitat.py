@@ -12,6 +12,7 @@ from ep_scenes import dataset_bytes
 
 from main_bench.episodes.dataset import load_table, read_manifest
 from main_bench.episodes.habitat import quaternion_to_yaw, yaw_to_quaternion
+from main_bench.io import folder_lock
 
 
 def test_export_then_import_round_trips(gen, cli, tmp_path, ep_cache):
@@ -48,6 +49,11 @@ def test_export_then_import_round_trips(gen, cli, tmp_path, ep_cache):
     assert cli("episodes", "validate", back, "--recheck", "--cache-dir", ep_cache).code == 0
     again = cli("episodes", "import", hab, "--out", back)
     assert again.code == 2 and "--overwrite" in again.err
+    before = dataset_bytes(back)
+    with folder_lock(back, lambda: AssertionError("the folder was free")):  # a run writing there now
+        busy = cli("episodes", "import", hab, "--out", back, "--format", "habitat", "--overwrite")
+    assert busy.code == 2 and "another run is writing a data set into it" in busy.err, busy.err
+    assert dataset_bytes(back) == before
 
     # A damaged export (one agent of a three-agent episode removed) is refused before anything is written.
     row = next(r for r in table.to_pylist() if r["agents"] == 3)
