@@ -251,23 +251,17 @@ def warm_up() -> None:
     from ..evaluation.run import executors, worker  # noqa: F401
     from ..navmesh import NavMesh
     from ..scenes.loader import Scene
+    from ..scenes.procedural.box_mesh import boxes_to_arrays
+    from ..scenes.procedural.model import Box
     from . import app  # noqa: F401
 
-    boxes = [(0.0, 0.0, -0.1, 4.0, 3.0, 0.0), (1.5, 1.0, 0.0, 2.0, 1.5, 0.8)]
-    vertices, faces = [], []
-    for x0, y0, z0, x1, y1, z1 in boxes:
-        base = len(vertices)
-        vertices += [(x, y, z) for z in (z0, z1) for y in (y0, y1) for x in (x0, x1)]
-        faces += [(base + a, base + b, base + c) for a, b, c in _BOX_FACES]
-    scene = Scene(scene_id="warm-up", path=None, meshes=(), vertices=np.asarray(vertices, np.float64),
-                  faces=np.asarray(faces, np.int64), objects=(), up_axis="z", up_reason="warm-up", scale=1.0,
-                  scale_reason="warm-up", content_hash="warm-up")
+    grey = (128, 128, 128, 255)
+    vertices, faces, _colours = boxes_to_arrays((Box((0.0, 0.0, -0.1), (4.0, 3.0, 0.0), grey),  # a floor
+                                                 Box((1.5, 1.0, 0.0), (2.0, 1.5, 0.8), grey)))  # a box on it
+    scene = Scene(scene_id="warm-up", path=None, meshes=(), vertices=vertices, faces=faces.astype(np.int64),
+                  objects=(), up_axis="z", up_reason="warm-up", scale=1.0, scale_reason="warm-up",
+                  content_hash="warm-up")
     worker.warm_kernels(NavMesh.build(scene))
-
-
-#: The 12 triangles of a box whose corners are numbered x + 2y + 4z (outward normals).
-_BOX_FACES = ((0, 2, 1), (1, 2, 3), (4, 5, 6), (5, 7, 6), (0, 1, 4), (1, 5, 4),
-              (2, 6, 3), (3, 6, 7), (0, 4, 2), (2, 4, 6), (1, 3, 5), (3, 7, 5))
 
 
 def serve(path: Path, idle_s: float = IDLE_S) -> None:

@@ -15,7 +15,8 @@ import trimesh
 
 from main_bench.scenes.importers.categories import MPCAT40
 from main_bench.scenes.objects import KNOWN_CATEGORIES
-from main_bench.scenes.procedural.export import Z_UP_TO_Y_UP, boxes_to_arrays
+from main_bench.scenes.procedural.box_mesh import boxes_to_arrays
+from main_bench.scenes.procedural.export import Z_UP_TO_Y_UP
 from main_bench.scenes.procedural.model import House
 
 #: Toolkit categories without an mpcat40 namesake, as a Matterport3D annotator would have filed them.

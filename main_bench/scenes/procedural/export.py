@@ -14,42 +14,11 @@ import trimesh
 
 from ...io import atomic_write_bytes, atomic_write_json
 from ..objects import OBJECTS_SCHEMA_VERSION
-from .model import Box, House
+from .box_mesh import boxes_to_arrays
+from .model import House
 
 #: Canonical (x, y, z) to glTF (x, z, -y): the inverse of the loader's +Y-up to +Z-up rotation.
 Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
-
-# Corners of a unit box (bit 0: x, bit 1: y, bit 2: z) and its twelve outward-facing triangles.
-_CORNERS = np.array([[(i >> 0) & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=np.float64)
-_BOX_FACES = np.array([
-    [0, 2, 1], [1, 2, 3],  # bottom (-z)
-    [4, 5, 6], [5, 7, 6],  # top (+z)
-    [0, 1, 4], [1, 5, 4],  # -y
-    [2, 6, 3], [3, 6, 7],  # +y
-    [0, 4, 2], [2, 4, 6],  # -x
-    [1, 3, 5], [3, 7, 5],  # +x
-])
-_DOWN_FACES = np.array([[0, 2, 1], [1, 2, 3]])
-
-
-def boxes_to_arrays(boxes: tuple[Box, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Vertices (canonical frame), triangles and RGBA vertex colours of a list of boxes."""
-    verts, faces, colors = [], [], []
-    n = 0
-    for b in boxes:
-        lo, hi = np.asarray(b.lo), np.asarray(b.hi)
-        if b.faces == "down":
-            v = lo + _CORNERS[:4] * (hi - lo)
-            f = _DOWN_FACES
-        else:
-            v = lo + _CORNERS * (hi - lo)
-            f = _BOX_FACES
-        verts.append(v)
-        faces.append(f + n)
-        colors.append(np.tile(np.array(b.color, dtype=np.uint8), (len(v), 1)))
-        n += len(v)
-    return np.concatenate(verts), np.concatenate(faces), np.concatenate(colors)
-
 
 def house_scene(house: House) -> trimesh.Scene:
     """The house as a trimesh scene in glTF's +Y-up frame, one node per structure group and per object."""
