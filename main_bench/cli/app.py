@@ -149,18 +149,26 @@ def run() -> None:
     code = run_warm(sys.argv[1:])
     if code is None:
         code = main()
-    import atexit
     import os
+
+    wind_down()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
+
+
+def wind_down() -> None:
+    """What a normal interpreter exit does before its teardown and a command needs, for a process that then
+    leaves by `os._exit` (`run`; the warm server's children): join the other non-daemon threads, run the
+    `atexit` handlers."""
+    import atexit
     import threading
 
     for thread in threading.enumerate():
         if thread is not threading.main_thread() and not thread.daemon:
             thread.join()
     atexit._run_exitfuncs()
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(Exception):
-            stream.flush()
-    os._exit(code)
 
 
 if __name__ == "__main__":

@@ -378,10 +378,8 @@ def _answer(conn: Any, listener: Any) -> None:
 def _run_child(conn: Any, request: dict[str, Any], fds: list[int]) -> None:
     """In the forked child: take over the client's streams, folder and environment, run the command as the
     console script would (`app.run`'s steps), report the exit code on `conn`; never returns."""
-    import atexit
     import signal
     import struct
-    import threading
 
     code = 1
     try:
@@ -405,13 +403,10 @@ def _run_child(conn: Any, request: dict[str, Any], fds: list[int]) -> None:
                                            buffering=1 if os.isatty(1) else -1)
         sys.stderr = sys.__stderr__ = open(2, "w", encoding=err_enc, errors=err_err,  # noqa: SIM115
                                            closefd=False, buffering=1)
-        from .app import main
+        from .app import main, wind_down
 
         code = main(sys.argv[1:])
-        for thread in threading.enumerate():
-            if thread is not threading.main_thread() and not thread.daemon:
-                thread.join()
-        atexit._run_exitfuncs()
+        wind_down()
     except BaseException:  # reported on the client's stderr, which this process now holds
         import traceback
 
