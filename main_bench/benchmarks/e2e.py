@@ -53,13 +53,15 @@ def _children_cpu() -> float:
 
 
 def _timed(cmd: list[str], env: dict[str, str] | None = None) -> dict[str, Any]:
-    """Run `cmd`; wall and CPU seconds (all its processes that were waited for), stdout."""
+    """Run `cmd`; wall and CPU seconds (all its processes that were waited for), stdout. CPU is None for a
+    command run in a warm server (`env` from `warm_server`): it is the server's children's, not this process's."""
     cpu0, t0 = _children_cpu(), time.perf_counter()
     res = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
     wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu0
     if res.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({res.returncode}): {res.stderr.strip()[-400:]}")
-    return {"wall_s": wall, "cpu_s": cpu, "stdout": res.stdout}
+    warm = env is not None and env.get("MAIN_BENCH_WARM") == "1"
+    return {"wall_s": wall, "cpu_s": None if warm else cpu, "stdout": res.stdout}
 
 
 def _median(runs: list[dict[str, Any]], key: str) -> float | None:
@@ -122,7 +124,8 @@ def warm_server() -> Iterator[dict[str, str]]:
 def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | None, comm_limit: int,
                      repeats: int, env: dict[str, str] | None = None) -> dict[str, Any]:
     """`main-bench evaluate` at 1 and 2 workers per baseline: medians and the 2-worker speed-up. With `env` from
-    `warm_server`, the commands run in the server's children, whose CPU time is not counted here (cpu_s None)."""
+    `warm_server`, the commands run in the server's children, whose CPU time is not counted here (cpu_s None,
+    `_timed`)."""
     out: dict[str, Any] = {}
     for name in baselines:
         lim = comm_limit if name == "comm" else limit
@@ -138,10 +141,8 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                 run = _timed(cmd, env)
                 doc = json.loads(run["stdout"])
                 run["episodes"] = doc["episodes_run"]
-                if env is not None:
-                    run["cpu_s"] = None
-                elif not doc.get("workers_forked"):  # forkserver workers are not our children: they report their CPU
-                    run["cpu_s"] += float(doc.get("worker_cpu_seconds", 0.0))
+                if run["cpu_s"] is not None and not doc.get("workers_forked"):  # forkserver workers are not our
+                    run["cpu_s"] += float(doc.get("worker_cpu_seconds", 0.0))  # children: they report their CPU
                 runs[workers].append(run)
                 shutil.rmtree(dest, ignore_errors=True)
         w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
@@ -182,8 +183,6 @@ def first_episode(workdir: Path, repeats: int, env: dict[str, str] | None = None
     for rep in range(repeats):
         dest = workdir / f"first-{rep}"
         runs.append(_timed(_evaluate_cmd("oracle", dest, "--limit", "1", "--task", "shared", "--agents", "2"), env))
-        if env is not None:
-            runs[-1]["cpu_s"] = None
         shutil.rmtree(dest, ignore_errors=True)
     return {"wall_s": _median(runs, "wall_s"), "cpu_s": _median(runs, "cpu_s")}
 
