@@ -9,15 +9,32 @@ BLAS is available by importing `scipy.linalg` (about 0.1 s of a command's start 
 What changes for other numba code in the same process: `np.correlate` and `np.convolve` of floats use numba's
 own loop instead of BLAS (same results). Whatever else needs a BLAS (`np.dot` of matrices, `np.linalg`) still
 imports `scipy.linalg` when it is compiled, as before. `scipy.linalg` itself imports normally afterwards.
+
+Two code-generation aids for the hot loops (`docs/navmesh.md`, "numba's bookkeeping"):
+
+- `uix(i)`: an index known to be >= 0, as unsigned. numba adds negative-index wrap-around to every access
+  through a signed index; through an unsigned one it does not.
+- `NO_REFCOUNTS`: options for a kernel that neither makes nor returns arrays. numba otherwise counts
+  references to array arguments inside the kernel (atomic increments and decrements around inlined helpers,
+  per loop iteration); its own string and sort kernels switch that off the same way.
 """
 
 from __future__ import annotations
 
 import sys
+from types import MappingProxyType
 
-from numba import njit
+from numba import njit, uint64
 
-__all__ = ["njit", "import_numpy_support"]
+__all__ = ["NO_REFCOUNTS", "import_numpy_support", "njit", "uix"]
+
+NO_REFCOUNTS = MappingProxyType({"_nrt": False})
+
+
+@njit(inline="always")
+def uix(i):
+    """`i` (>= 0) as an unsigned array index, so numba indexes without wrap-around (inlined where used)."""
+    return uint64(i)
 
 
 def import_numpy_support() -> bool:

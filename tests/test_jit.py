@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
-from main_bench.jit import import_numpy_support
+import numpy as np
+
+from main_bench.jit import NO_REFCOUNTS, import_numpy_support, njit, uix
 
 
-def _run(code: str) -> list:
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True)
+def _run(code: str, env: dict[str, str] | None = None) -> list:
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True,
+                         env=None if env is None else {**os.environ, **env})
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
@@ -46,3 +50,73 @@ def test_the_probe_is_left_alone_once_numba_or_scipy_has_loaded_it():
     assert "numba.np.arraymath" in sys.modules
     assert import_numpy_support() is False
     assert sys.modules.get("scipy.linalg", "absent") is not None
+
+
+def test_an_unsigned_index_reads_the_same_element_without_the_wrap_around():
+    @njit
+    def signed(a, i):
+        return a[i]
+
+    @njit
+    def unsigned(a, i):
+        return a[uix(i)]
+
+    a = np.arange(7.0) * 1.5
+    assert [unsigned(a, i) for i in range(7)] == [signed(a, i) for i in range(7)] == list(a)
+
+    def body(f):
+        ir = f.inspect_llvm(f.signatures[0])
+        return ir[ir.index("define"):ir.index("\n}", ir.index("define"))]
+
+    assert "icmp slt" in body(signed)  # numba's test for a negative index...
+    assert "icmp slt" not in body(unsigned)  # ...is gone
+
+
+def test_kernels_without_refcounts_give_the_same_answers_with_no_reference_counting():
+    @njit(inline="always")
+    def twice(x, i):
+        return x[i] * 2.0
+
+    def total(x):
+        t = 0.0
+        for i in range(x.shape[0]):
+            if x[i] > 1.0:
+                t += twice(x, i)
+        return t
+
+    counted, uncounted = njit(total), njit(**NO_REFCOUNTS)(total)
+    x = np.linspace(0.0, 3.0, 11)
+    assert counted(x) == uncounted(x) == 2.0 * x[x > 1.0].sum()
+    assert "NRT_decref" in counted.inspect_llvm(counted.signatures[0])
+    assert "NRT_" not in uncounted.inspect_llvm(uncounted.signatures[0])
+
+
+def test_the_distance_field_kernels_count_no_references_and_measure_straight_lines(tmp_path):
+    """The field's propagation compiled afresh (empty numba cache, so its code can be inspected) on an open
+    5 x 4 grid: every cell sees the target, so its distance is the straight line; and no reference counting
+    is left in the propagation or its segment walk."""
+    code = ("import json, numpy as np\n"
+            "from main_bench.navmesh import _field\n"
+            "from main_bench.navmesh._raster import DX, DY\n"
+            "nx, ny, cs = 5, 4, 0.5\n"
+            "ix, iy = np.meshgrid(np.arange(nx), np.arange(ny)); ix = ix.ravel(); iy = iy.ravel()\n"
+            "nbr = np.full((nx * ny, 8), -1, np.int32)\n"
+            "for u in range(nx * ny):\n"
+            "    for d in range(8):\n"
+            "        jx, jy = ix[u] + DX[d], iy[u] + DY[d]\n"
+            "        if 0 <= jx < nx and 0 <= jy < ny: nbr[u, d] = jy * nx + jx\n"
+            "px = (ix + 0.5) * cs; py = (iy + 0.5) * cs; pz = np.zeros(nx * ny)\n"
+            "tnode = np.array([7], np.int64); tpos = np.array([[1.3, 0.6, 0.0]])\n"
+            "g, anchor, root, klo, khi, done, hk, hv, pos, size = _field.seed(nbr, px, py, pz, tnode, tpos, 0.05)\n"
+            "size = _field.seed_ring(nbr, px, py, pz, tnode, tpos, 0.05, cs, px, py, g, anchor, klo, khi, hk, hv,"
+            " pos, size)\n"
+            "stats = np.zeros(4, np.int64)\n"
+            "size, full = _field.settle(nbr, px, py, pz, tnode, tpos, 0.05, cs, px, py, g, anchor, root, klo, khi,"
+            " done, hk, hv, pos, size, np.zeros(0, np.int64), stats)\n"
+            "line = np.hypot(px - 1.3, py - 0.6)\n"
+            "nrt = [f.inspect_llvm(f.signatures[0]).count('NRT_') for f in (_field.settle, _field._line_of_sight)]\n"
+            "print(json.dumps([int(size), bool(full), bool(done.all()), float(np.abs(g - line).max()), nrt]))")
+    size, full, all_done, worst, nrt = _run(code, {"NUMBA_CACHE_DIR": str(tmp_path)})
+    assert (size, full, all_done) == (0, False, True)
+    assert worst < 1e-12
+    assert nrt == [0, 0]

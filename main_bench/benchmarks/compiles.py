@@ -21,14 +21,16 @@ KERNEL_MODULES = ("main_bench.navmesh._raster", "main_bench.navmesh._graph", "ma
 
 
 def kernels() -> dict[str, Any]:
-    """Every numba dispatcher defined in `KERNEL_MODULES`, by `module.name`."""
+    """Every numba dispatcher defined in `KERNEL_MODULES` that compiles on its own, by `module.name` (helpers
+    with `inline="always"` are compiled into their callers, never by themselves)."""
     from numba.core.dispatcher import Dispatcher
 
     out = {}
     for name in KERNEL_MODULES:
         module = importlib.import_module(name)
         for attr, value in vars(module).items():
-            if isinstance(value, Dispatcher) and value.py_func.__module__ == name:
+            if (isinstance(value, Dispatcher) and value.py_func.__module__ == name
+                    and value.targetoptions.get("inline") != "always"):
                 out[f"{name}.{attr}"] = value
     return out
 

@@ -14,18 +14,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..jit import njit
+from ..jit import NO_REFCOUNTS, njit, uix
 from ._graph import _heap4_pop, _heap4_push
 
 
-@njit(cache=True)
+@njit(inline="always")
 def _anchor_pos(a, n, px, py, pz, tpos):
     if a >= n:
         return tpos[a - n, 0], tpos[a - n, 1], tpos[a - n, 2]
     return px[a], py[a], pz[a]
 
 
-@njit(cache=True)
+@njit(inline="always")
 def _bracket(dx, dy):
     """The one or two directions (0..7: E, N, W, S, NE, NW, SW, SE) between which (dx, dy) points.
 
@@ -47,7 +47,7 @@ def _bracket(dx, dy):
     return orth, (-1 if ax <= tiny else diag)
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNTS)
 def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
     """Walk the cells the segment from node v's point to (sx, sy, sz) crosses (goal = node of that point).
 
@@ -55,11 +55,11 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
 
     True when each crossed cell is linked to the previous one and its height stays within ztol of the line.
     """
-    x = px[v]
-    y = py[v]
+    x = px[uix(v)]
+    y = py[uix(v)]
     dx = sx - x
     dy = sy - y
-    dz = sz - pz[v]
+    dz = sz - pz[uix(v)]
     len2 = dx * dx + dy * dy
     inv_len2 = 1.0 / len2 if len2 > 0.0 else 0.0
     stepx = 1 if dx > 0 else -1
@@ -67,8 +67,8 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
     # parameter t in [0, 1] along the segment where the next x / y cell boundary is crossed
     tdx = cs / abs(dx) if dx != 0 else np.inf
     tdy = cs / abs(dy) if dy != 0 else np.inf
-    tmx = (0.5 - stepx * (x - cx[v]) / cs) * tdx if dx != 0 else np.inf
-    tmy = (0.5 - stepy * (y - cy[v]) / cs) * tdy if dy != 0 else np.inf
+    tmx = (0.5 - stepx * (x - cx[uix(v)]) / cs) * tdx if dx != 0 else np.inf
+    tmy = (0.5 - stepy * (y - cy[uix(v)]) / cs) * tdy if dy != 0 else np.inf
     cur = v
     limit = int(abs(dx) / cs + abs(dy) / cs) + 3
     for _ in range(limit):
@@ -93,13 +93,13 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
             tmy += tdy
         if t > 1.0 + 1e-9:
             return cur == goal
-        cur = nbr[cur, d]
+        cur = nbr[uix(cur), uix(d)]
         if cur < 0:
             return False
         # height of the line at the point nearest this cell's centre
-        tc = ((px[cur] - x) * dx + (py[cur] - y) * dy) * inv_len2
+        tc = ((px[uix(cur)] - x) * dx + (py[uix(cur)] - y) * dy) * inv_len2
         tc = min(max(tc, 0.0), 1.0)
-        if abs(pz[cur] - (pz[v] + tc * dz)) > ztol:
+        if abs(pz[uix(cur)] - (pz[uix(v)] + tc * dz)) > ztol:
             return False
     return cur == goal
 
@@ -177,7 +177,7 @@ def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, kh
     return size
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNTS)
 def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo, khi, done, hk, hv, pos, size,
            stops, stats):
     """Advance a propagation (state from `seed` and `seed_ring`) until every node in `stops` (-1 entries
@@ -194,7 +194,7 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
     k = 0
     while size > 0:
         if nstops > 0:
-            while k < nstops and (stops[k] < 0 or done[stops[k]]):
+            while k < nstops and (stops[uix(k)] < 0 or done[uix(stops[uix(k)])]):
                 k += 1
             if k == nstops:
                 break
@@ -202,26 +202,26 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
             return size, True  # the caller grows the queue and calls again (arrays are not reassigned here:
             # a kernel that reassigns them runs about a tenth slower)
         _, u, size = _heap4_pop(hk, hv, pos, size)
-        done[u] = True
+        done[uix(u)] = True
         stats[3] += 1
-        s = anchor[u]
-        root[u] = s - n if s >= n else root[s]
+        s = anchor[uix(u)]
+        root[uix(u)] = s - n if s >= n else root[uix(s)]
         sx, sy, sz = _anchor_pos(s, n, px, py, pz, tpos)
-        ds = 0.0 if s >= n else g[s]
+        ds = 0.0 if s >= n else g[uix(s)]
         for d in range(8):
-            v = nbr[u, d]
-            if v < 0 or done[v]:
+            v = nbr[uix(u), uix(d)]
+            if v < 0 or done[uix(v)]:
                 continue
-            best = g[v]
+            best = g[uix(v)]
             banchor = -1
             blo = 0.0
             bhi = 0.0
             # 1. through u's anchor, if v sees it (a v anchored at s already holds exactly that distance)
-            far = anchor[v] == s  # v is already as near as a path through s makes it
+            far = anchor[uix(v)] == s  # v is already as near as a path through s makes it
             if not far:
-                hx = sx - px[v]
-                hy = sy - py[v]
-                hz = pz[v] - sz
+                hx = sx - px[uix(v)]
+                hy = sy - py[uix(v)]
+                hz = pz[uix(v)] - sz
                 dh = np.sqrt(hx * hx + hy * hy)
                 cand = ds + np.sqrt(dh * dh + hz * hz)
                 far = cand >= best
@@ -236,21 +236,21 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
                         for dd in (d1, d2):
                             if dd < 0:
                                 continue
-                            w = nbr[v, dd]
+                            w = nbr[uix(v), uix(dd)]
                             if w < 0:
                                 ok = False
                                 blocked = dd == d1  # the first cell the segment enters is not linked
                                 break
-                            if w != s and not done[w]:
+                            if w != s and not done[uix(w)]:
                                 ok = False
                                 blocked = True  # w settles later and relaxes v again
                                 break
-                            if not (w == s or anchor[w] == s):
+                            if not (w == s or anchor[uix(w)] == s):
                                 ok = False
                                 break
                             if w != s:
-                                lo = max(lo, klo[w])
-                                hi = min(hi, khi[w])
+                                lo = max(lo, klo[uix(w)])
+                                hi = min(hi, khi[uix(w)])
                     if not (ok and lo <= hi) and not blocked:
                         # the cheap test fails near shadow edges and ties: walk the segment cell by cell
                         goal = s if s < n else tnode[s - n]
@@ -267,22 +267,22 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
                         bhi = hi
             # 2. through u itself as a corner: never shorter than through u's anchor s (the triangle inequality),
             # so only worth it where v does not see s; a v anchored at u already holds exactly that distance
-            if banchor < 0 and not far and anchor[v] != u:
-                ex = px[v] - px[u]
-                ey = py[v] - py[u]
-                ez = pz[v] - pz[u]
+            if banchor < 0 and not far and anchor[uix(v)] != u:
+                ex = px[uix(v)] - px[uix(u)]
+                ey = py[uix(v)] - py[uix(u)]
+                ez = pz[uix(v)] - pz[uix(u)]
                 eh = np.sqrt(ex * ex + ey * ey)
-                c = g[u] + np.sqrt(eh * eh + ez * ez)
+                c = g[uix(u)] + np.sqrt(eh * eh + ez * ez)
                 if c < best:
                     best = c
                     banchor = u
                     blo = (ez - ztol) / eh
                     bhi = (ez + ztol) / eh
             if banchor >= 0:
-                g[v] = best
-                anchor[v] = banchor
-                klo[v] = blo
-                khi[v] = bhi
+                g[uix(v)] = best
+                anchor[uix(v)] = banchor
+                klo[uix(v)] = blo
+                khi[uix(v)] = bhi
                 size = _heap4_push(hk, hv, pos, size, best, v)
     return size, False
 
