@@ -28,7 +28,15 @@ from numba import njit, uint64
 
 __all__ = ["NO_REFCOUNTS", "import_numpy_support", "njit", "uix"]
 
-NO_REFCOUNTS = MappingProxyType({"_nrt": False})
+
+def _no_refcounts() -> dict[str, bool]:
+    from numba.core.options import DefaultOptions
+
+    # a private option (numba/core/options.py); should a numba release drop it, kernels keep counting (slower)
+    return {"_nrt": False} if hasattr(DefaultOptions, "_nrt") else {}
+
+
+NO_REFCOUNTS = MappingProxyType(_no_refcounts())
 
 
 @njit(inline="always")

@@ -8,8 +8,8 @@ child processes (`python -m main_bench.benchmarks.large_child`), each recording 
 - build: CPU seconds (`time.process_time`) and peak resident memory above the resident memory before the build
   (`ru_maxrss`), per 1,000 m^2 navigable; the first build of the process (numba kernels loaded from their
   cache) and the median of repeats.
-- field: CPU seconds of one distance field from a random target, median over repeats after a warm-up, per
-  1,000 m^2 of the island it covers.
+- field: CPU seconds of one whole distance field from a random target, median over `FIELD_TARGETS` targets
+  after a warm-up (fields from different targets differ by up to a fifth), per 1,000 m^2 of the island it covers.
 - start: wall and CPU seconds of a new process that loads the scene (`load_scene_geometry`), first (empty scene
   cache) and repeated (median); the same for the whole `main-bench navmesh build` command repeated.
 - evaluate: `main-bench evaluate --agent baseline:oracle` agent-steps per second on the building (its data set
@@ -41,6 +41,8 @@ GOAL_EVAL_RATIO = 0.5
 #: The generated building: built-in house `BUILDING_SEED` (two storeys) stretched in plan.
 BUILDING_SEED, BUILDING_STRETCH = 1, 3.0
 REAL_SCENE = "recast_dungeon.obj"
+#: Random targets whose whole fields are timed per scene (the quick run times 3).
+FIELD_TARGETS = 15
 
 
 def loadavg() -> list[float]:
@@ -146,7 +148,7 @@ def _evaluate(scene: str, navmesh: Path | None, work: Path, env: dict[str, str],
 def _scene_rows(name: str, scene: Path, env: dict[str, str], quick: bool, work: Path) -> dict[str, Any]:
     repeats = 2 if quick else 5
     start = _start(scene, env, 2 if quick else 5)  # first: fills the scene cache the child then reads
-    nav = _child(["navmesh", str(scene), str(repeats)], env)
+    nav = _child(["navmesh", str(scene), str(repeats), str(3 if quick else FIELD_TARGETS)], env)
     out = work / f"{scene.stem}.navmesh"
     _timed(_navmesh_build_cmd(scene, out), env)
     again = [_timed(_navmesh_build_cmd(scene, out), env) for _ in range(2 if quick else 3)]

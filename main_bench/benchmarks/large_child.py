@@ -1,5 +1,5 @@
 """One measurement of `benchmarks.large` in a fresh process: `python -m main_bench.benchmarks.large_child
-navmesh SCENE REPEATS` prints one JSON line (build CPU s and peak memory, distance-field CPU s, the load)."""
+navmesh SCENE REPEATS FIELDS` prints one JSON line (build CPU s and peak memory, distance-field CPU s, the load)."""
 
 from __future__ import annotations
 
@@ -17,8 +17,9 @@ def _max_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
 
 
-def navmesh_figures(scene_path: str, repeats: int) -> dict[str, Any]:
-    """Build the scene's navmesh (first build, then `repeats` more) and time `repeats` distance fields."""
+def navmesh_figures(scene_path: str, repeats: int, fields: int) -> dict[str, Any]:
+    """Build the scene's navmesh (first build, then `repeats` more) and time whole distance fields from `fields`
+    random targets of its largest island."""
     from ..navmesh import NavMesh, NavMeshSettings
     from ..scenes.cache import load_scene_geometry
     from .large import loadavg
@@ -44,7 +45,7 @@ def navmesh_figures(scene_path: str, repeats: int) -> dict[str, Any]:
              "peak_mb_per_1000m2": round(peak_mb * k, 1), "loadavg": loadavg()}
     rng = np.random.default_rng(0)
     island = nm.islands[0]
-    targets = nm.sample(repeats + 1, rng, island=0)
+    targets = nm.sample(fields + 1, rng, island=0)
     nm.distance_field(targets[0]).complete()  # warm-up: numba kernels loaded
     cpus, walls = [], []
     reached = 0
@@ -63,6 +64,6 @@ def navmesh_figures(scene_path: str, repeats: int) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 4 or sys.argv[1] != "navmesh":
-        raise SystemExit("usage: python -m main_bench.benchmarks.large_child navmesh SCENE REPEATS")
-    print(json.dumps(navmesh_figures(sys.argv[2], int(sys.argv[3]))))
+    if len(sys.argv) != 5 or sys.argv[1] != "navmesh":
+        raise SystemExit("usage: python -m main_bench.benchmarks.large_child navmesh SCENE REPEATS FIELDS")
+    print(json.dumps(navmesh_figures(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]))))

@@ -48,10 +48,11 @@ def _bracket(dx, dy):
 
 
 @njit(cache=True, **NO_REFCOUNTS)
-def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
+def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy, steps, offsets):
     """Walk the cells the segment from node v's point to (sx, sy, sz) crosses (goal = node of that point).
 
     (px, py): the nodes' points, (cx, cy): their cell centres (a point lies within its cell).
+    steps, offsets: `FieldSpace.steps` and `FieldSpace.offsets` (a step by an offset needs no load of `nbr`).
 
     True when each crossed cell is linked to the previous one and its height stays within ztol of the line.
     """
@@ -93,9 +94,12 @@ def _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy):
             tmy += tdy
         if t > 1.0 + 1e-9:
             return cur == goal
-        cur = nbr[uix(cur), uix(d)]
-        if cur < 0:
-            return False
+        if (steps[uix(cur)] >> d) & 1:
+            cur += offsets[uix(d)]  # the same cell as nbr[cur, d], without waiting for that load
+        else:
+            cur = nbr[uix(cur), uix(d)]
+            if cur < 0:
+                return False
         # height of the line at the point nearest this cell's centre
         tc = ((px[uix(cur)] - x) * dx + (py[uix(cur)] - y) * dy) * inv_len2
         tc = min(max(tc, 0.0), 1.0)
@@ -144,7 +148,8 @@ def seed(nbr, px, py, pz, tnode, tpos, ztol):
 
 
 @njit(cache=True)
-def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, khi, hk, hv, pos, size):
+def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, steps, offsets, g, anchor, klo, khi, hk, hv, pos,
+              size):
     """Seed the targets' first ring of neighbours (after `seed`); returns the queue's new size.
 
     The target node's centre is not the target: its neighbours cannot use the bracket test against it (which
@@ -167,7 +172,7 @@ def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, kh
             if d >= g[v] or dh <= 1e-9:
                 continue
             tx, ty, tz = tpos[j, 0], tpos[j, 1], tpos[j, 2]
-            if not _line_of_sight(v, u, tx, ty, tz, nbr, px, py, pz, cs, ztol, cx, cy):
+            if not _line_of_sight(v, u, tx, ty, tz, nbr, px, py, pz, cs, ztol, cx, cy, steps, offsets):
                 continue
             g[v] = d
             anchor[v] = n + j
@@ -178,8 +183,8 @@ def seed_ring(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, klo, kh
 
 
 @njit(cache=True, **NO_REFCOUNTS)
-def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo, khi, done, hk, hv, pos, size,
-           stops, stats):
+def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, steps, offsets, g, anchor, root, klo, khi, done, hk, hv,
+           pos, size, stops, stats):
     """Advance a propagation (state from `seed` and `seed_ring`) until every node in `stops` (-1 entries
     ignored) is done, or to the end when `stops` is empty. Returns (size, full): the queue's size (0 when every
     reachable node is done) and whether it stopped early because the queue (hk, hv) needs more room.
@@ -255,7 +260,7 @@ def settle(nbr, px, py, pz, tnode, tpos, ztol, cs, cx, cy, g, anchor, root, klo,
                         # the cheap test fails near shadow edges and ties: walk the segment cell by cell
                         goal = s if s < n else tnode[s - n]
                         stats[0] += 1
-                        ok = _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy)
+                        ok = _line_of_sight(v, goal, sx, sy, sz, nbr, px, py, pz, cs, ztol, cx, cy, steps, offsets)
                         stats[1] += int(dh / cs)
                         stats[2] += ok
                         lo = (hz - ztol) / dh

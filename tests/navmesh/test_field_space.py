@@ -1,6 +1,9 @@
-"""The distance fields' tile numbering (`FieldSpace`): a permutation of the cells that changes no answer."""
+"""The distance fields' tile numbering (`FieldSpace`): a permutation of the cells that changes no answer; and its
+link steps, which let segment walks find the next cell without a load, to the same cells."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
@@ -68,3 +71,30 @@ def test_fields_answer_the_same_whatever_the_numbering():
 def test_fields_answer_the_same_whatever_the_numbering_on_a_real_multi_storey_scene(real_scenes):
     nm = NavMesh.build(load_scene(real_scenes / "recast_dungeon.obj", up="y"), NavMeshSettings(cell_size=0.1))
     _same_with_and_without_tiles(nm, 1)
+
+
+def test_link_steps_name_exactly_the_links_at_the_common_offsets():
+    nm = NavMesh.build(box_house(1))
+    sp = nm._field_space()
+    n = len(sp.links)
+    # one level: the next cell east is the next index, north the next row of the tile
+    assert list(sp.offsets) == [1, FIELD_TILE, -1, -FIELD_TILE, FIELD_TILE + 1, FIELD_TILE - 1, -FIELD_TILE - 1,
+                                1 - FIELD_TILE]
+    bits = np.unpackbits(sp.steps[:, None], axis=1, bitorder="little").astype(bool)
+    expect = (sp.links == np.arange(n)[:, None] + sp.offsets[None, :]) & (sp.links >= 0)
+    assert np.array_equal(bits, expect)
+    assert bits.mean() > 0.4  # most links, so most steps skip the load
+
+
+def test_fields_answer_the_same_with_and_without_link_steps(real_scenes):
+    for nm, seed in ((NavMesh.build(box_house(3)), 2),
+                     (NavMesh.build(load_scene(real_scenes / "recast_dungeon.obj", up="y"), NavMeshSettings(cell_size=0.1)),
+                      3)):
+        rng = np.random.default_rng(seed)
+        targets = nm.sample(6, rng)
+        queries = nm.sample(40, rng)
+        with_steps = _answers(nm, targets, queries)
+        nm._space = dataclasses.replace(nm._field_space(), steps=np.zeros_like(nm._field_space().steps))
+        without = _answers(nm, targets, queries)
+        for a, b in zip(with_steps, without, strict=True):
+            assert np.array_equal(a, b)
