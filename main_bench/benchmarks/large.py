@@ -9,7 +9,7 @@ child processes (`python -m main_bench.benchmarks.large_child`), each recording 
   (`ru_maxrss`), per 1,000 m^2 navigable; the first build of the process (numba kernels loaded from their
   cache) and the median of repeats.
 - field: CPU seconds of one whole distance field from a random target, median over `FIELD_TARGETS` targets
-  after a warm-up (fields from different targets differ by up to a fifth), per 1,000 m^2 of the island it covers.
+  after a warm-up (fields from different targets differ by up to a third), per 1,000 m^2 of the island it covers.
 - start: wall and CPU seconds of a new process that loads the scene (`load_scene_geometry`), first (empty scene
   cache) and repeated (median); the same for the whole `main-bench navmesh build` command repeated.
 - evaluate: `main-bench evaluate --agent baseline:oracle` agent-steps per second on the building (its data set
