@@ -332,6 +332,29 @@ def test_workers_forked_by_the_command_give_the_same_files(reference, tiny_datas
         pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
 
 
+@pytest.mark.skipif(sys.platform != "linux", reason="workers are forked only on Linux (forkserver elsewhere)")
+def test_forked_workers_start_with_the_command_s_objects_frozen_until_they_are_closed(tiny_dataset, tmp_path):
+    """Before forking its workers the command freezes what it holds (`gc.freeze`), so the workers' collections
+    do not copy the pages they share with it; closing the workers unfreezes it. In a fresh single-threaded
+    process, as the command line is."""
+    dataset, cache = tiny_dataset
+    code = ("import gc, json, sys\n"
+            "from main_bench.evaluation.settings import EvalSettings\n"
+            "from main_bench.evaluation.run.executors import LocalWorkers\n"
+            f"s = EvalSettings(episodes={str(dataset)!r}, split='val', agent={WALKER!r}, out={str(tmp_path / 'o')!r},"
+            f" limit=4, chunk_size=2, cache_dir={str(cache)!r})\n"
+            "before = gc.get_freeze_count()\n"
+            "pool = LocalWorkers(s, 1)\n"
+            "during = gc.get_freeze_count()\n"
+            "pool.close()\n"
+            "print(json.dumps([pool.forked, before, during, gc.get_freeze_count()]))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    forked, before, during, after = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert forked is True and before == 0 and after == 0
+    assert during > 10_000  # the imported modules' objects, numba's among them
+
+
 def test_workers_started_before_planning_stop_on_bad_input(tiny_dataset, tmp_path):
     """The local workers start before the evaluation is planned; a split the data set lacks is still refused
     with the planner's own error, nothing is written, and no worker process is left behind."""

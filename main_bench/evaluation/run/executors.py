@@ -9,6 +9,7 @@ stops the others and is raised here (a `MainBenchError` keeps its class, so exit
 from __future__ import annotations
 
 import contextlib
+import gc
 import multiprocessing as mp
 import pickle
 import queue
@@ -139,6 +140,10 @@ class LocalWorkers:
         self.results = context.Queue()
         self.procs = [context.Process(target=_local_worker, args=(settings, k, self.jobs[k], self.results, warm),
                                       daemon=False) for k in range(n)]
+        if warm:
+            # what this process holds now is never collected, here or in a worker: a worker's collections then do
+            # not write to (and so copy) the pages it shares with this process (Python's advice for gc.freeze)
+            gc.freeze()
         with single_threaded_children():
             for p in self.procs:
                 p.start()
@@ -230,7 +235,7 @@ class LocalWorkers:
 
     def close(self) -> None:
         """Wait for the workers to exit after a finished `run` (stop them at once otherwise), collect the CPU
-        seconds they report, and release the queues."""
+        seconds they report, release the queues, and unfreeze what was frozen for forked workers."""
         for p in self.procs:
             p.join(timeout=30 if self.finished else 0)
         for p in self.procs:
@@ -247,6 +252,8 @@ class LocalWorkers:
             with contextlib.suppress(Exception):
                 q.close()
                 q.cancel_join_thread()
+        if self.forked:
+            gc.unfreeze()  # the workers are gone: what was frozen for them is collected as before
 
 
 def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage,
