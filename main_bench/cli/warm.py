@@ -18,8 +18,9 @@ Signals the client gets (SIGINT, SIGTERM, SIGHUP) reach the command's process gr
 
 A server answers only clients whose key matches: the toolkit's files (paths, sizes, modification times), the
 Python interpreter and its `sys.path`, the modification times of the folders on it but the first (a `pip
-install` changes them; the first is the working or the script's folder) and the whole environment but for `PWD`, `OLDPWD`, `SHLVL`, `_` and `MAIN_BENCH_WARM`. So edited code, a
-changed package or another variable gets a fresh server. Imports nothing heavy: the console script imports it for every command.
+install` changes them; the first is the working or the script's folder) and the whole environment but for
+`PWD`, `OLDPWD`, `SHLVL`, `_` and `MAIN_BENCH_WARM`. So edited code, a changed package or another variable gets
+a fresh server. Imports nothing heavy: the console script imports it for every command.
 """
 
 from __future__ import annotations
@@ -44,7 +45,8 @@ _STARTING_S = 60.0
 def server_key(package: Path | None = None, environ: dict[str, str] | None = None) -> str:
     """Hex digest naming the server that may run this process's commands: it covers the toolkit's files under
     `package` (default: this installation's), the interpreter, `sys.path` with each folder's modification time
-    (but the first's: the working or the script's folder), and `environ` (default: this process's) but for `_IGNORED_VARIABLES`."""
+    (but the first's: the working or the script's folder), and `environ` (default: this process's) but for
+    `_IGNORED_VARIABLES`."""
     import hashlib
 
     package = Path(__file__).resolve().parents[1] if package is None else Path(package)

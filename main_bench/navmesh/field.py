@@ -43,7 +43,7 @@ class FieldSpace:
     offsets[d]: the most common difference between a link in direction d and its cell's index (for a tile of one
     level: +1 east, +16 north); bit d of steps[k] says that cell k's link in direction d is k + offsets[d]. A
     segment walk steps by the offset where the bit says so, so finding the next cell does not wait for a load
-    from `links` (about a tenth of a whole field on this project's 2-core machine, the same cells).
+    from `links` (3 to 7% of a whole field on this project's 2-core machine; the same cells).
     """
 
     order: np.ndarray
@@ -73,8 +73,9 @@ class FieldSpace:
         index[order] = np.arange(len(order), dtype=np.int32)
         nbr = g.nbr[order]
         links = _field.field_index(index, np.ascontiguousarray(nbr.reshape(-1), dtype=np.int64)).reshape(nbr.shape)
+        links = links.astype(np.int32)
         steps, offsets = _link_steps(links)
-        return cls(order=order, index=index, links=links.astype(np.int32), ax=np.ascontiguousarray(navmesh._ax[order]),
+        return cls(order=order, index=index, links=links, ax=np.ascontiguousarray(navmesh._ax[order]),
                    ay=np.ascontiguousarray(navmesh._ay[order]), zs=np.ascontiguousarray(g.zs[order]),
                    px=np.ascontiguousarray(navmesh._px[order]), py=np.ascontiguousarray(navmesh._py[order]),
                    steps=steps, offsets=offsets)
@@ -85,14 +86,14 @@ class FieldSpace:
 
 
 def _link_steps(links: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(steps, offsets) of `FieldSpace` for links (N, 8) in field indices (-1 where none)."""
+    """(steps, offsets) of `FieldSpace` for int32 links (N, 8) in field indices (-1 where none)."""
     span = 4 * FIELD_TILE * FIELD_TILE  # offsets within a few tiles' rows; a larger one is never the commonest
     own = np.arange(len(links), dtype=np.int32)
     steps = np.zeros(len(links), np.uint8)
     offsets = np.zeros(links.shape[1], np.int64)
     for d in range(links.shape[1]):
         linked = links[:, d] >= 0
-        diff = links[:, d].astype(np.int32) - own
+        diff = links[:, d] - own
         near = diff[linked & (np.abs(diff) < span)]
         if len(near) == 0:
             continue
@@ -131,7 +132,8 @@ class DistanceField:
         g_, anchor, root, klo, khi, done, hk, hv, pos, size = _field.seed(sp.links, sp.ax, sp.ay, sp.zs, self._tnodes,
                                                                            self._tpos, LINE_Z_TOLERANCE)
         size = _field.seed_ring(sp.links, sp.ax, sp.ay, sp.zs, self._tnodes, self._tpos, LINE_Z_TOLERANCE,
-                                g.cell_size, sp.px, sp.py, sp.steps, sp.offsets, g_, anchor, klo, khi, hk, hv, pos, size)
+                                g.cell_size, sp.px, sp.py, sp.steps, sp.offsets, g_, anchor, klo, khi, hk, hv, pos,
+                                size)
         #: per field index (`FieldSpace`): distance, anchor (a field index, or N + target), target reached
         self._g, self._anchor, self._root = g_, anchor, root
         #: the propagation's remaining state (slopes, settled flags, queue); None once every node is settled

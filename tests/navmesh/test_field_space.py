@@ -87,9 +87,8 @@ def test_link_steps_name_exactly_the_links_at_the_common_offsets():
 
 
 def test_fields_answer_the_same_with_and_without_link_steps(real_scenes):
-    for nm, seed in ((NavMesh.build(box_house(3)), 2),
-                     (NavMesh.build(load_scene(real_scenes / "recast_dungeon.obj", up="y"), NavMeshSettings(cell_size=0.1)),
-                      3)):
+    dungeon = load_scene(real_scenes / "recast_dungeon.obj", up="y")
+    for nm, seed in ((NavMesh.build(box_house(3)), 2), (NavMesh.build(dungeon, NavMeshSettings(cell_size=0.1)), 3)):
         rng = np.random.default_rng(seed)
         targets = nm.sample(6, rng)
         queries = nm.sample(40, rng)
