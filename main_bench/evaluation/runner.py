@@ -177,7 +177,8 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
     out = Path(settings.out)
     _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
     def busy() -> ResultsError:
-        return ResultsError("another evaluation is writing to it now; wait for it to end or give another --out", path=out)
+        return ResultsError("another evaluation is writing to it now; wait for it to end or give another --out",
+                            path=out)
 
     with folder_lock(out, busy):  # two runs in one folder would take each other's files for leftovers
         return _run(settings, manifest, chunks, out, progress, pool, t0)
