@@ -12,7 +12,6 @@ from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
-import pyarrow.dataset as pads
 import pyarrow.parquet as pq
 
 from .errors import InputError
@@ -33,6 +32,8 @@ def read_parquet(source: Path | Sequence[Path], *, error: type[InputError], fix:
     try:
         if isinstance(source, Path) and source.is_file():
             return pq.read_table(source, columns=columns, filters=filter, schema=schema)
+        import pyarrow.dataset as pads  # here, not at the top: importing it imports pandas (0.25 s)
+
         target = str(source) if isinstance(source, Path) else [str(f) for f in files]
         ds = pads.dataset(target, schema=schema, format="parquet", partitioning=partitioning,
                           partition_base_dir=None if base_dir is None else str(base_dir),
@@ -42,6 +43,29 @@ def read_parquet(source: Path | Sequence[Path], *, error: type[InputError], fix:
         culprit, why = _culprit(files, schema, exc)
         raise error(f"unreadable Parquet file ({why}); {fix}",
                     path=culprit if culprit is not None else _folder(source)) from None
+
+
+def read_values(files: Sequence[Path], columns: list[str], *, error: type[InputError], fix: str) -> dict[str, list]:
+    """The values (Python objects) of `columns` of each file in turn, concatenated in the order given; a file
+    that cannot be read, or lacks one of the columns, raises `error` naming it with `fix` appended.
+
+    Unlike `read_parquet`, this imports neither `pyarrow.dataset` nor pandas (pyarrow imports pandas, when
+    installed, with its datasets module and on its first conversion to NumPy or from Python objects), so an
+    evaluation plans its work without them while its forked workers wait for it (`evaluation.runner.plan`).
+    """
+    values: dict[str, list] = {c: [] for c in columns}
+    for f in files:
+        try:
+            table = pq.ParquetFile(f).read(columns=columns)
+            read = {c: table.column(c).to_pylist() for c in columns}
+        except READ_ERRORS as exc:
+            raise error(f"unreadable Parquet file ({_short(exc)}); {fix}", path=Path(f)) from None
+        except KeyError:
+            raise error(f"lacks column(s) {[c for c in columns if c not in table.schema.names]}; {fix}",
+                        path=Path(f)) from None
+        for c in columns:
+            values[c].extend(read[c])
+    return values
 
 
 def _files(source: Path | Sequence[Path]) -> list[Path]:

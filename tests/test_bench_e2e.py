@@ -59,3 +59,22 @@ def test_the_comm_baseline_is_evaluated_as_agent_policies(monkeypatch, tmp_path)
     comm = [c for c in commands if "baseline:comm" in c]
     assert len(comm) == 2 and all(c[c.index("--mode") + 1] == "comm" and "--limit" in c for c in comm)
     assert not any("--mode" in c for c in commands if "baseline:oracle" in c)
+
+
+def test_evaluate_scaling_reports_the_core_seconds_each_command_left_idle(monkeypatch, tmp_path):
+    def fake_timed(cmd, env=None):
+        two = cmd[cmd.index("--workers") + 1] == "2"
+        return {"wall_s": 6.0 if two else 10.0, "cpu_s": 10.8 if two else 9.5,
+                "stdout": '{"episodes_run": 8, "workers_forked": true}'}
+
+    monkeypatch.setattr(e2e, "_timed", fake_timed)
+    row = e2e.evaluate_scaling(tmp_path, ("oracle",), 8, 8, 2)["oracle"]
+    assert row["workers_1"]["idle_core_s"] == 0.5 and row["workers_2"]["idle_core_s"] == 1.2
+    assert "idle core-seconds at 2 workers 1.2" in "\n".join(e2e.summary_lines({
+        "machine": {"cpus": 2, "load_average_1min_at_start": 0, "load_average_1min_at_end": 0},
+        "startup": {"help_s": 0.1, "import_cli_s": 0.1, "bare_python_s": 0.1},
+        "numba": {"kernels": 1, "first_process_compiled": 0, "second_process_compiled": 0},
+        "first_episode": {"wall_s": 1.0}, "evaluate": {"oracle": row},
+        "generate": {"workers_1": {"wall_s": 1.0}, "workers_2": {"wall_s": 1.0}, "speedup_2_over_1": 1.0},
+        "env": {"long_agent_steps_per_s": 1, "short_agent_steps_per_s": 1, "short_over_long": 1,
+                "reset_ms_same_scene": 1, "reset_ms_scene_seen_before": 1}}))

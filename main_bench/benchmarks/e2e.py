@@ -70,6 +70,14 @@ def _median(runs: list[dict[str, Any]], key: str) -> float | None:
     return round(statistics.median(r[key] for r in runs), 3)
 
 
+def _idle(runs: list[dict[str, Any]], workers: int) -> float | None:
+    """Median core-seconds a command left unused on `workers` cores: workers x wall - CPU (its serial start and
+    end, waits); None without CPU figures."""
+    if any(r["cpu_s"] is None for r in runs):
+        return None
+    return round(statistics.median(workers * r["wall_s"] - r["cpu_s"] for r in runs), 3)
+
+
 def _cli() -> list[str]:
     return [sys.executable, "-m", "main_bench.cli.app"]
 
@@ -123,7 +131,8 @@ def warm_server() -> Iterator[dict[str, str]]:
 
 def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | None, comm_limit: int,
                      repeats: int, env: dict[str, str] | None = None) -> dict[str, Any]:
-    """`main-bench evaluate` at 1 and 2 workers per baseline: medians and the 2-worker speed-up. With `env` from
+    """`main-bench evaluate` at 1 and 2 workers per baseline: medians (wall, CPU, and idle core-seconds: what the
+    serial start and end leave unused, the part of the speed-up the code controls) and the 2-worker speed-up. With `env` from
     `warm_server`, the commands run in the server's children, whose CPU time is not counted here (cpu_s None,
     `_timed`)."""
     out: dict[str, Any] = {}
@@ -147,8 +156,8 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                 shutil.rmtree(dest, ignore_errors=True)
         w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
         out[name] = {"episodes": runs[1][0]["episodes"], "limit_per_track": lim,
-                     "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
-                     "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
+                     "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s"), "idle_core_s": _idle(runs[1], 1)},
+                     "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s"), "idle_core_s": _idle(runs[2], 2)},
                      "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
                      "ratios": [round(a["wall_s"] / b["wall_s"], 2) for a, b in zip(runs[1], runs[2], strict=True)]}
     return out
@@ -313,7 +322,8 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
     for name, row in result["evaluate"].items():
         lines.append(f"evaluate baseline:{name} ({row['episodes']} episodes): 1 worker {row['workers_1']['wall_s']:.1f} s, "
                      f"2 workers {row['workers_2']['wall_s']:.1f} s, speed-up {row['speedup_2_over_1']}x "
-                     f"(CPU {row['workers_1']['cpu_s']:.1f} / {row['workers_2']['cpu_s']:.1f} s)")
+                     f"(CPU {row['workers_1']['cpu_s']:.1f} / {row['workers_2']['cpu_s']:.1f} s, "
+                     f"idle core-seconds at 2 workers {row['workers_2']['idle_core_s']})")
     if "warm" in result:
         lines.append(f"warm server (MAIN_BENCH_WARM=1): first episode {result['warm']['first_episode']['wall_s']:.2f} s")
         for mode, row in ((m, result["warm"]["oracle_scaling"][m]) for m in ("cold", "warm")

@@ -44,9 +44,27 @@ def emit(command: str, payload: dict[str, Any], as_json: bool, render: Callable[
         typer.echo(render(payload))
 
 
+def stderr_is_terminal() -> bool:
+    """Whether rich could take standard error for a terminal (a progress bar would show): it is a TTY, or the
+    environment says to treat it as one (`TTY_COMPATIBLE=1`, `FORCE_COLOR`); rich makes the final call."""
+    import os
+
+    if os.environ.get("TTY_COMPATIBLE") == "0":
+        return False
+    if os.environ.get("TTY_COMPATIBLE") == "1" or os.environ.get("FORCE_COLOR"):
+        return True
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):  # replaced by an object without it, or closed
+        return False
+
+
 @contextlib.contextmanager
 def progress(description: str, total: int | None, enabled: bool = True) -> Iterator[Callable[[int], None]]:
     """A rich progress bar on stderr; yields `advance(n)`. Silent when stderr is not a terminal or disabled."""
+    if not enabled or not stderr_is_terminal():  # rich (0.04 s to import) only for a bar to show
+        yield lambda n=1: None
+        return
     from rich.console import Console
     from rich.progress import (
         BarColumn,

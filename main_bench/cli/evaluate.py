@@ -12,7 +12,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from .common import JsonOption, emit, parse_int_list
+from .common import JsonOption, emit, parse_int_list, stderr_is_terminal
 
 app = typer.Typer(help="Evaluate a submitted team policy on an episode split.", rich_markup_mode=None, invoke_without_command=True)
 
@@ -28,11 +28,13 @@ class _Progress:
         self._t0 = time.perf_counter()
 
     def start(self, episodes_total: int, episodes_done: int) -> None:
+        if not self.enabled or not stderr_is_terminal():
+            return  # rich (0.04 s to import) only for a bar to show
         from rich.console import Console
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
         console = Console(stderr=True)
-        if not self.enabled or not console.is_terminal:
+        if not console.is_terminal:
             return
         self._bar = Progress(TextColumn("evaluating"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                              TextColumn("{task.fields[rate]}"), console=console)

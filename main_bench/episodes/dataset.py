@@ -6,40 +6,56 @@ from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
-import pyarrow.dataset as pads
 
 from ..errors import DatasetError
 from ..io import sha256_file
-from ..parquet_read import read_parquet
+from ..parquet_read import read_parquet, read_values
 from ..scenes.loader import scene_content_hash
 from .manifest import Manifest, SceneEntry, ShardEntry, read_manifest
 from .schema import PARTITION_SCHEMA, ROW_SCHEMA, Episode
 
 _FIX = "restore it or regenerate the data set"
 
-__all__ = ["Manifest", "SceneEntry", "ShardEntry", "load_episodes", "load_navmesh", "load_table", "read_manifest",
-           "resolve_scene"]
+__all__ = ["Manifest", "SceneEntry", "ShardEntry", "episode_scenes", "load_episodes", "load_navmesh", "load_table",
+           "read_manifest", "resolve_scene"]
+
+
+def shard_files(manifest: Manifest, split: str | None = None, task: str | None = None,
+                agents: int | None = None) -> list[Path]:
+    """The shard files of a split / task / agent count (all when None), checked: each is there and matches its
+    checksum in the manifest."""
+    shards = [s for s in manifest.shards if (split is None or s.split == split) and (task is None or s.task == task)
+              and (agents is None or s.agents == agents)]
+    missing = [manifest.root / s.path for s in shards if not (manifest.root / s.path).is_file()]
+    if missing:
+        raise DatasetError("shard listed in the manifest is missing; restore it or regenerate the data set",
+                           path=missing[0])
+    check_checksums(manifest, shards)
+    return [manifest.root / s.path for s in shards]
 
 
 def load_table(dataset: str | Path, split: str | None = None, task: str | None = None,
                agents: int | None = None) -> pa.Table:
     """The episode rows with partition columns `split`, `task`, `agents`, filtered, sorted by episode_id."""
     root = Path(dataset)
-    manifest = read_manifest(root)
-    files = [root / s.path for s in manifest.shards
-             if (split is None or s.split == split) and (task is None or s.task == task)
-             and (agents is None or s.agents == agents)]
-    missing = [f for f in files if not f.is_file()]
-    if missing:
-        raise DatasetError("shard listed in the manifest is missing; restore it or regenerate the data set",
-                           path=missing[0])
+    files = shard_files(read_manifest(root), split, task, agents)
     schema = pa.unify_schemas([ROW_SCHEMA, PARTITION_SCHEMA])
     if not files:
         return schema.empty_table()
-    check_checksums(manifest, [s for s in manifest.shards if root / s.path in set(files)])
+    import pyarrow.dataset as pads  # here: it imports pandas (0.25 s), which `episode_scenes` does without
+
     part = pads.partitioning(PARTITION_SCHEMA, flavor="hive")
     table = read_parquet(files, error=DatasetError, fix=_FIX, schema=schema, partitioning=part, base_dir=root)
     return table.sort_by("episode_id")
+
+
+def episode_scenes(manifest: Manifest, split: str, task: str, agents: int) -> tuple[list[str], list[str]]:
+    """(episode ids sorted, their scene ids) of one split / task / agent count: `load_table`'s two columns,
+    read without importing pandas or `pyarrow.dataset` (an evaluation plans with it while its workers wait)."""
+    values = read_values(shard_files(manifest, split, task, agents), ["episode_id", "scene_id"],
+                         error=DatasetError, fix=_FIX)
+    pairs = sorted(zip(values["episode_id"], values["scene_id"], strict=True))
+    return [e for e, _ in pairs], [s for _, s in pairs]
 
 
 def check_checksums(manifest: Manifest, shards: list[ShardEntry]) -> None:

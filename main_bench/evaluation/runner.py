@@ -71,7 +71,7 @@ def check_navmesh_algorithm(manifest: Any) -> None:
 
 def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
     """(manifest, chunks) of the evaluation; a split/task/agents selection with no episodes raises DatasetError."""
-    from ..episodes.dataset import load_table, read_manifest
+    from ..episodes.dataset import episode_scenes, read_manifest
 
     manifest = read_manifest(settings.episodes)
     check_navmesh_algorithm(manifest)
@@ -89,9 +89,7 @@ def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
     chunks: list[Chunk] = []
     scene_of: dict[str, str] = {}
     for task, agents in chosen:
-        table = load_table(settings.episodes, settings.split, task, agents).select(["episode_id", "scene_id"])
-        ids = table.column("episode_id").to_pylist()
-        scenes = table.column("scene_id").to_pylist()
+        ids, scenes = episode_scenes(manifest, settings.split, task, agents)  # without pandas: see `run.executors`
         scene_of.update(zip(ids, scenes, strict=True))
         chunks.extend(make_chunks(settings.split, task, agents, ids, settings.chunk_size, settings.limit, scenes,
                                   settings.seed))

@@ -355,6 +355,48 @@ def test_forked_workers_start_with_the_command_s_objects_frozen_until_they_are_c
     assert during > 10_000  # the imported modules' objects, numba's among them
 
 
+@pytest.mark.skipif(sys.platform != "linux", reason="workers are forked only on Linux (forkserver elsewhere)")
+@pytest.mark.parametrize("agent", [WALKER, "baseline:oracle"])
+def test_forked_workers_run_without_pandas_and_the_command_loads_it_once_they_have_work(reference, tiny_dataset,
+                                                                                         tmp_path, agent):
+    """The command line plans without pandas and forks its worker before loading it; the worker never loads it
+    (pyarrow takes it as absent there) and writes the same files; the command loads it for its own chunks and the
+    summary, after handing out the first chunk. Without a terminal, no progress bar: rich is not loaded."""
+    dataset, cache = tiny_dataset
+    out, log = tmp_path / "out", tmp_path / "log"
+    log.mkdir()
+    args = ["evaluate", "--episodes", dataset, "--split", "val", "--agent", agent, "--out", out, "--limit", "4",
+            "--chunk-size", "2", "--cache-dir", cache, "--json", "--workers", "2"]
+    code = ("import json, os, sys\n"
+            "import main_bench.evaluation.run.executors as E\n"
+            "handout, work = E.Blocks.next, E._local_worker\n"
+            "def first(self, *a, **k):\n"
+            f"    path = os.path.join({str(log)!r}, 'handout.json')\n"
+            "    if not os.path.exists(path):\n"
+            "        json.dump('pandas' in sys.modules, open(path, 'w'))\n"
+            "    return handout(self, *a, **k)\n"
+            "def worker(*a, **k):\n"
+            "    try:\n"
+            "        return work(*a, **k)\n"
+            "    finally:\n"
+            f"        json.dump('pandas' in sys.modules, open(os.path.join({str(log)!r}, f'w{{os.getpid()}}.json'), 'w'))\n"
+            "E.Blocks.next, E._local_worker = first, worker\n"
+            "from main_bench.cli.app import main\n"
+            f"code = main({[str(a) for a in args]!r})\n"
+            "print(json.dumps(['pandas' in sys.modules, 'rich' in sys.modules]))\n"
+            "sys.exit(code)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    workers = [json.loads(f.read_text()) for f in log.glob("w*.json")]
+    assert json.loads((log / "handout.json").read_text()) is False and workers == [False]
+    assert json.loads(proc.stdout.strip().splitlines()[-1]) == [True, False]
+    doc = json.loads("\n".join(proc.stdout.strip().splitlines()[:-1]))
+    assert doc["workers_forked"] is True and doc["episodes_run"] == 8
+    if agent == WALKER:
+        for kind in ("records", "trajectories"):
+            pd.testing.assert_frame_equal(_frame(out, kind), _frame(reference, kind))
+
+
 def test_workers_started_before_planning_stop_on_bad_input(tiny_dataset, tmp_path):
     """The local workers start before the evaluation is planned; a split the data set lacks is still refused
     with the planner's own error, nothing is written, and no worker process is left behind."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import gc
+import importlib.abc
 import multiprocessing as mp
 import pickle
 import queue
@@ -40,8 +41,34 @@ def run_inline(settings: EvalSettings, chunks: Sequence[Chunk], on_message: OnMe
         ctx.close()
 
 
+class _WithoutPandas(importlib.abc.MetaPathFinder):
+    """Makes `import pandas` fail in a forked worker process that has not imported it (see `without_pandas`)."""
+
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> None:
+        if name == "pandas" or name.startswith("pandas."):
+            raise ModuleNotFoundError(f"No module named {name!r}: evaluation worker processes run without pandas "
+                                      "(main_bench.evaluation.run.executors.without_pandas)", name=name)
+        return None
+
+
+def without_pandas() -> None:
+    """Hide pandas from this (forked worker) process, if it has not imported it.
+
+    A worker converts to and from Arrow but uses nothing of pandas; pyarrow, when pandas is installed, imports
+    it (0.25 s) on its first conversion to NumPy or from Python objects, and with `pyarrow.dataset`. Hidden, pyarrow
+    takes pandas as absent (it supports that) and the worker starts on its first chunk without that cost; the
+    command, which forked it before importing pandas, imports it while the worker works (`runner.plan` reads
+    without it). The part files are the same (`test_workers_do_not_change_the_results`)."""
+    import sys
+
+    if "pandas" not in sys.modules and not any(isinstance(f, _WithoutPandas) for f in sys.meta_path):
+        sys.meta_path.insert(0, _WithoutPandas())
+
+
 def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any, warm: bool) -> None:
     ctx = None
+    if warm:
+        without_pandas()
     try:
         ctx = WorkerContext(settings)
         ctx.prepare(kernels=not warm)
