@@ -56,7 +56,8 @@ def read_values(files: Sequence[Path], columns: list[str], *, error: type[InputE
     values: dict[str, list] = {c: [] for c in columns}
     for f in files:
         try:
-            table = pq.ParquetFile(f).read(columns=columns)
+            with pq.ParquetFile(f) as parquet:
+                table = parquet.read(columns=columns)
             read = {c: table.column(c).to_pylist() for c in columns}
         except READ_ERRORS as exc:
             raise error(f"unreadable Parquet file ({_short(exc)}); {fix}", path=Path(f)) from None

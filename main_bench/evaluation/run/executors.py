@@ -58,7 +58,8 @@ def without_pandas() -> None:
     it (0.25 s) on its first conversion to NumPy or from Python objects, and with `pyarrow.dataset`. Hidden, pyarrow
     takes pandas as absent (it supports that) and the worker starts on its first chunk without that cost; the
     command, which forked it before importing pandas, imports it while the worker works (`runner.plan` reads
-    without it). The part files are the same (`test_workers_do_not_change_the_results`)."""
+    without it). The part files are the same as one worker's (`test_workers_forked_by_the_command_give_the_same_files`,
+    `test_forked_workers_run_without_pandas_and_the_command_loads_it_once_they_have_work`)."""
     import sys
 
     if "pandas" not in sys.modules and not any(isinstance(f, _WithoutPandas) for f in sys.meta_path):
