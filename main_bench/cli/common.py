@@ -76,7 +76,7 @@ def progress(description: str, total: int | None, enabled: bool = True) -> Itera
     )
 
     console = Console(stderr=True)
-    if not enabled or not console.is_terminal:
+    if not console.is_terminal:  # rich's own call (Jupyter, IDLE, a closed stream)
         yield lambda n=1: None
         return
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

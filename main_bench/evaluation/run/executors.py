@@ -14,6 +14,7 @@ import importlib.abc
 import multiprocessing as mp
 import pickle
 import queue
+import sys
 import threading
 import traceback
 from collections.abc import Callable, Sequence
@@ -60,8 +61,6 @@ def without_pandas() -> None:
     command, which forked it before importing pandas, imports it while the worker works (`runner.plan` reads
     without it). The part files are the same as one worker's (`test_workers_forked_by_the_command_give_the_same_files`,
     `test_forked_workers_run_without_pandas_and_the_command_loads_it_once_they_have_work`)."""
-    import sys
-
     if "pandas" not in sys.modules and not any(isinstance(f, _WithoutPandas) for f in sys.meta_path):
         sys.meta_path.insert(0, _WithoutPandas())
 
