@@ -37,17 +37,13 @@ def test_an_evaluation_worker_imports_no_scene_or_table_library():
 
 def test_the_command_line_forks_its_evaluation_workers_light():
     """What `evaluate --workers N` holds when it forks its workers (the CLI, the runner, the worker's modules,
-    navmesh kernels loaded on the data set's first navmesh): no scene library, no k-d trees, no plotting, no
+    navmesh kernels loaded on a navmesh made in memory): no scene library, no k-d trees, no plotting, no
     pandas or pyarrow's dataset reader (which brings pandas: the worker runs without it, the command loads it
     once the worker has work), and nothing that makes forking unsafe (`fork_is_safe`)."""
-    from pathlib import Path
-
-    sample = Path(__file__).resolve().parents[1] / "episodes" / "sample"
     code = ("import json, sys, main_bench.cli.app, main_bench.cli.evaluate, main_bench.evaluation.runner; "
-            "from main_bench.episodes.dataset import read_manifest; "
             "from main_bench.evaluation.run.worker import load_kernels; "
             "from main_bench.worker_threads import fork_is_safe; "
-            f"load_kernels(read_manifest({str(sample)!r})); "
+            "load_kernels(); "
             "print(json.dumps([fork_is_safe(), [m for m in ('trimesh', 'scipy.spatial', 'matplotlib', 'torch', "
             "'moderngl', 'pandas', 'pyarrow.dataset') if m in sys.modules]]))")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)

@@ -145,11 +145,13 @@ def evaluate(
         from ..sim.render.gl import check_device
 
         check_device(gpu)  # a missing device is bad input: one line, exit 2, before any work
-    bar = _Progress(enabled=not no_progress and not as_json)
+    # no bar to show: no sink, so the workers send no live progress (`executors.PROGRESS_INTERVAL_S`)
+    bar = _Progress(enabled=True) if not no_progress and not as_json and stderr_is_terminal() else None
     try:
         outcome = run_evaluation(settings, progress=bar)
     finally:
-        bar.stop()
+        if bar is not None:
+            bar.stop()
     payload = {
         "out": str(outcome.out),
         "chunks_run": outcome.chunks_run,

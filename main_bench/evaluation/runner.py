@@ -28,7 +28,9 @@ SUBMISSION_FILE = "submission.json"
 
 
 class ProgressSink(Protocol):
-    """Receives progress: `start` once with the planned work, then `advance` as episodes finish."""
+    """Receives progress: `start` once with the planned work, then `advance` as episodes finish (batched: a
+    worker reports at most every `run.executors.PROGRESS_INTERVAL_S` seconds, and the rest at its chunk's end).
+    Without a sink, workers send no progress during chunks."""
 
     def start(self, episodes_total: int, episodes_done: int) -> None:
         """Episodes planned in all, and how many a previous run already finished."""
@@ -159,13 +161,21 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
     if settings.executor == "local" and settings.workers > 1:
         from .run.executors import LocalWorkers
 
-        pool = LocalWorkers(settings, settings.workers - 1)  # they start up while this process plans; it works too
+        # they start up while this process plans; it works too
+        pool = LocalWorkers(settings, settings.workers - 1, _progress_every(progress))
     try:
         outcome = _evaluate(settings, progress, pool, t0)
     finally:
         if pool is not None:
             pool.close()
     return outcome if pool is None else replace(outcome, worker_cpu_seconds=pool.cpu_seconds, workers_forked=pool.forked)
+
+
+def _progress_every(progress: ProgressSink | None) -> float | None:
+    """Seconds between the workers' live progress messages: none without a sink (`executors.PROGRESS_INTERVAL_S`)."""
+    from .run.executors import PROGRESS_INTERVAL_S
+
+    return None if progress is None else PROGRESS_INTERVAL_S
 
 
 def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float) -> EvaluationOutcome:
@@ -192,18 +202,20 @@ def _run(settings: EvalSettings, manifest: Any, chunks: list[Chunk], out: Path, 
         progress.start(sum(len(c.episode_ids) for c in chunks),
                        sum(len(c.episode_ids) for c in chunks if c.finished(out)))
     counters = {"episodes": 0, "steps": 0}
+    shown: dict[str, tuple[int, int]] = {}  # per running chunk: (episodes, agent-steps) its live progress showed
 
     def on_message(kind: str, value: Any) -> None:
-        if kind == "episode":
-            counters["episodes"] += 1
-            counters["steps"] += int(value)
-            if progress is not None:
-                progress.advance(1, int(value))
-        elif kind == "chunk" and settings.executor == "ray":
-            counters["episodes"] += value.episodes
-            counters["steps"] += value.agent_steps
+        if kind == "episode":  # a `Progress`: only sent when `progress` is given
+            episodes, steps = shown.get(value.key, (0, 0))
+            shown[value.key] = (episodes + value.episodes, steps + value.agent_steps)
             if progress is not None:
                 progress.advance(value.episodes, value.agent_steps)
+        elif kind == "chunk":
+            counters["episodes"] += value.episodes
+            counters["steps"] += value.agent_steps
+            episodes, steps = shown.pop(value.key, (0, 0))
+            if progress is not None:
+                progress.advance(value.episodes - episodes, value.agent_steps - steps)
 
     if pending:
         from .run import executors
@@ -211,7 +223,7 @@ def _run(settings: EvalSettings, manifest: Any, chunks: list[Chunk], out: Path, 
         if settings.executor == "ray":
             executors.run_ray(settings, pending, settings.workers, on_message)
         else:
-            executors.run_local(settings, pending, settings.workers, on_message, pool)
+            executors.run_local(settings, pending, settings.workers, on_message, pool, _progress_every(progress))
     summary = write_summary(settings, manifest, chunks)
     return EvaluationOutcome(out=out, summary=summary, chunks_run=len(pending), chunks_skipped=skipped,
                              episodes_run=counters["episodes"], agent_steps=counters["steps"],

@@ -159,6 +159,24 @@ class NavMesh:
         return cls(build_grid(vertices, faces, settings), settings, scene_id, gh, gh)
 
     @classmethod
+    def flat_square(cls, n: int = 3, settings: NavMeshSettings = NavMeshSettings()) -> NavMesh:
+        """An n x n-cell navmesh on one flat floor (z = 0, corner at the origin), made in memory with the array
+        types of a loaded one: it loads numba's distance-field kernels without reading a scene or a file."""
+        from ._raster import DX, DY
+
+        iy, ix = np.divmod(np.arange(n * n, dtype=np.int64), n)
+        nbr = np.full((n * n, 8), -1, np.int64)
+        for d in range(8):
+            jx, jy = ix + DX[d], iy + DY[d]
+            inside = (jx >= 0) & (jx < n) & (jy >= 0) & (jy < n)
+            nbr[inside, d] = (jy * n + jx)[inside]
+        z = np.zeros(n * n)
+        cs = float(settings.cell_size)
+        grid = Grid(x0=0.0, y0=0.0, cell_size=cs, nx=n, ny=n, ix=ix, iy=iy, z=z, zs=z.copy(), nbr=nbr,
+                    island=np.zeros(n * n, np.int64), col_start=column_starts(ix, iy, n, n), ox=z.copy(), oy=z.copy())
+        return cls(grid, settings, f"flat-square-{n}", "", "", [(0.0, n * n * cs * cs)])
+
+    @classmethod
     def build_cached(cls, scene: Any, settings: NavMeshSettings, cache_dir: str | Path) -> NavMesh:
         """Like `build`, reusing `cache_dir/<scene_id>-<key>.navmesh` keyed by geometry, settings, algorithm."""
         key = cls.key_of(scene, settings)

@@ -1,9 +1,11 @@
 """Where chunks run: in this process, in local worker processes, or as Ray actors.
 
 Every executor gives each worker one `WorkerContext` and feeds it chunks; the part files a chunk writes do not
-depend on which worker ran it. `on_message(kind, value)` receives `("episode", agent_steps)` after each episode
-(in-process and local workers) and `("chunk", ChunkReport)` after each chunk. The first error in any worker
-stops the others and is raised here (a `MainBenchError` keeps its class, so exit codes survive).
+depend on which worker ran it. `on_message(kind, value)` receives `("chunk", ChunkReport)` after each chunk and,
+when asked for live progress (`progress_every` seconds; in-process and local workers), `("episode", Progress)`
+during a chunk: the episodes finished since that worker's last message, at most one message per `progress_every`.
+The first error in any worker stops the others and is raised here (a `MainBenchError` keeps its class, so exit
+codes survive).
 """
 
 from __future__ import annotations
@@ -16,8 +18,10 @@ import pickle
 import queue
 import sys
 import threading
+import time
 import traceback
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from ...worker_threads import fork_is_safe, single_threaded_children
@@ -29,14 +33,52 @@ OnMessage = Callable[[str, Any], None]
 
 #: the answer to a worker's ("ahead", k) when no chunk is handed out ahead: it asks again ("want") once idle
 NONE_AHEAD = False
+#: Seconds between a worker's live progress messages (the rest of a chunk's count comes with its report). A message
+#: per episode cost a two-worker oracle evaluation 0.45 CPU-seconds in thread wake-ups (`docs/speed.md`).
+PROGRESS_INTERVAL_S = 0.25
 
 
-def run_inline(settings: EvalSettings, chunks: Sequence[Chunk], on_message: OnMessage) -> None:
-    """Run every chunk in this process, in order."""
+@dataclass(frozen=True)
+class Progress:
+    """Live progress of a running chunk (`key`): episodes finished, and their agent-steps, since the previous
+    `Progress` of that chunk. The chunk's `ChunkReport` has its totals."""
+
+    key: str
+    episodes: int
+    agent_steps: int
+
+
+class ProgressBatch:
+    """A chunk's `on_episode` callback that sends `("episode", Progress)` through `send` at most once per
+    `interval` seconds (what finished since the last one); what is left unsent is in the chunk's report."""
+
+    def __init__(self, send: OnMessage, key: str, interval: float = PROGRESS_INTERVAL_S) -> None:
+        self._send, self._key, self._interval = send, key, interval
+        self._episodes = self._steps = 0
+        self._last = time.monotonic()
+
+    def __call__(self, agent_steps: int) -> None:
+        self._episodes += 1
+        self._steps += int(agent_steps)
+        now = time.monotonic()
+        if now - self._last >= self._interval:
+            self._send("episode", Progress(self._key, self._episodes, self._steps))
+            self._episodes = self._steps = 0
+            self._last = now
+
+
+def _on_episode(send: OnMessage, chunk: Chunk, every: float | None) -> ProgressBatch | None:
+    return None if every is None else ProgressBatch(send, chunk.key, every)
+
+
+def run_inline(settings: EvalSettings, chunks: Sequence[Chunk], on_message: OnMessage,
+               progress_every: float | None = PROGRESS_INTERVAL_S) -> None:
+    """Run every chunk in this process, in order (`progress_every`: seconds between live progress messages
+    during a chunk; None: none)."""
     ctx = WorkerContext(settings)
     try:
         for chunk in chunks:
-            report = ctx.run_chunk(chunk, lambda steps: on_message("episode", steps))
+            report = ctx.run_chunk(chunk, _on_episode(on_message, chunk, progress_every))
             on_message("chunk", report)
     finally:
         ctx.close()
@@ -65,7 +107,8 @@ def without_pandas() -> None:
         sys.meta_path.insert(0, _WithoutPandas())
 
 
-def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any, warm: bool) -> None:
+def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any, warm: bool,
+                  progress_every: float | None) -> None:
     ctx = None
     if warm:
         without_pandas()
@@ -78,7 +121,8 @@ def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any, war
             # the next chunk of its own block is asked for now, so it waits for nothing between chunks (the
             # command hands out chunks from a thread that shares the interpreter lock with its own episodes)
             results.put(("ahead", wid))
-            report = ctx.run_chunk(chunk, lambda steps: results.put(("episode", steps)))
+            report = ctx.run_chunk(chunk, _on_episode(lambda kind, value: results.put((kind, value)), chunk,
+                                                     progress_every))
             results.put(("chunk", report))
             chunk = jobs.get()
             if chunk is NONE_AHEAD:
@@ -135,7 +179,8 @@ class Blocks:
 
 class LocalWorkers:
     """`n` worker processes, started before the evaluation is planned, then fed chunks by `run` (once; with
-    `inline`, this process works through chunks beside them); `close` stops them.
+    `inline`, this process works through chunks beside them); `close` stops them. Workers send live progress
+    (`Progress`) at most every `progress_every` seconds during a chunk; with None, only their chunk reports.
 
     Where `fork_is_safe()` (Linux, one thread, no GL or torch loaded: the command line's case) they are
     forked from this process once it has imported the worker's modules and loaded numba's navmesh kernels, which
@@ -143,29 +188,29 @@ class LocalWorkers:
     policy, `WorkerContext.prepare`, while this process plans). Otherwise they come from a forkserver that has
     imported the worker's modules, and load the kernels themselves."""
 
-    def __init__(self, settings: EvalSettings, n: int) -> None:
+    def __init__(self, settings: EvalSettings, n: int, progress_every: float | None = PROGRESS_INTERVAL_S) -> None:
         warm = fork_is_safe()
         #: whether the workers were forked from this process (the OS then counts their CPU as its children's)
         self.forked = warm
         if warm:
             context = mp.get_context("fork")
-            with contextlib.suppress(Exception):  # best effort: bad input is reported by the planner, next
-                from ...episodes.dataset import read_manifest
-                from .worker import load_kernels
+            from .worker import load_kernels
 
-                load_kernels(read_manifest(settings.episodes))
+            load_kernels()
         else:
             context = mp.get_context("forkserver")
             context.set_forkserver_preload(["main_bench.evaluation.run.worker"])
         self.settings = settings
         self.n = n
+        self.progress_every = progress_every
         #: CPU seconds the workers reported when they exited.
         self.cpu_seconds = 0.0
         #: whether `run` has finished every chunk (the workers then exit on their own)
         self.finished = False
         self.jobs = [context.Queue() for _ in range(n)]
         self.results = context.Queue()
-        self.procs = [context.Process(target=_local_worker, args=(settings, k, self.jobs[k], self.results, warm),
+        self.procs = [context.Process(target=_local_worker,
+                                      args=(settings, k, self.jobs[k], self.results, warm, progress_every),
                                       daemon=False) for k in range(n)]
         if warm:
             # what this process holds now is never collected, here or in a worker: a worker's collections then do
@@ -209,7 +254,7 @@ class LocalWorkers:
                 ctx = WorkerContext(self.settings)
                 try:
                     while (chunk := hand_out(self.n)) is not None:
-                        report = ctx.run_chunk(chunk, lambda steps: deliver("episode", steps))
+                        report = ctx.run_chunk(chunk, _on_episode(deliver, chunk, self.progress_every))
                         deliver("chunk", report)
                 finally:
                     ctx.close()
@@ -284,14 +329,15 @@ class LocalWorkers:
 
 
 def run_local(settings: EvalSettings, chunks: Sequence[Chunk], workers: int, on_message: OnMessage,
-              pool: LocalWorkers | None = None) -> None:
+              pool: LocalWorkers | None = None, progress_every: float | None = PROGRESS_INTERVAL_S) -> None:
     """Run the chunks on `workers` local workers: this process and `workers - 1` worker processes (`pool` when
-    already started: it serves whatever the chunk count), or in this process alone for one worker or one chunk."""
+    already started: it serves whatever the chunk count, with its own `progress_every`), or in this process alone
+    for one worker or one chunk. `progress_every`: seconds between live progress messages (None: none)."""
     if pool is None and (workers <= 1 or len(chunks) <= 1):
-        run_inline(settings, chunks, on_message)
+        run_inline(settings, chunks, on_message, progress_every)
         return
     own = pool is None
-    pool = pool or LocalWorkers(settings, min(workers, len(chunks)) - 1)
+    pool = pool or LocalWorkers(settings, min(workers, len(chunks)) - 1, progress_every)
     try:
         pool.run(chunks, on_message, inline=True)
     finally:

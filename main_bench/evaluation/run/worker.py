@@ -131,7 +131,7 @@ class WorkerContext:
         except Exception:  # noqa: BLE001  (the first chunk meets the same failure and handles it as an episode's)
             self._policy = None
         if kernels:
-            load_kernels(self.manifest)
+            load_kernels()
 
     # -- work ---------------------------------------------------------------------------------------------------
 
@@ -265,14 +265,13 @@ def trajectory_table(trace: EpisodeTrace, talk: tuple[np.ndarray, np.ndarray] | 
     )
 
 
-def load_kernels(manifest: Any) -> None:
+def load_kernels() -> None:
     """Load numba's compiled navmesh kernels (from their on-disk cache) in this process, by one distance field,
-    look-up, path and snap on the data set's first navmesh. Caches nothing that an evaluation reads."""
-    if not manifest.scenes:
-        return
-    from ...episodes.dataset import load_navmesh
+    look-up, path and snap on a small navmesh made in memory (`NavMesh.flat_square`: the kernels' argument types
+    are those of any loaded navmesh, and no file is read). Caches nothing that an evaluation reads."""
+    from ...navmesh import NavMesh
 
-    warm_kernels(load_navmesh(manifest, min(manifest.scenes)))
+    warm_kernels(NavMesh.flat_square())
 
 
 def warm_kernels(navmesh: Any) -> None:
