@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import sys
+
+import pytest
+
 from main_bench.benchmarks import e2e
 
 
@@ -70,11 +74,39 @@ def test_evaluate_scaling_reports_the_core_seconds_each_command_left_idle(monkey
     monkeypatch.setattr(e2e, "_timed", fake_timed)
     row = e2e.evaluate_scaling(tmp_path, ("oracle",), 8, 8, 2)["oracle"]
     assert row["workers_1"]["idle_core_s"] == 0.5 and row["workers_2"]["idle_core_s"] == 1.2
+    assert row["cpu_ratio_2_over_1"] == round(10.8 / 9.5, 3)
+    host = {"cpu_alone_s": 9.5, "cpu_side_by_side_s": 10.2, "side_by_side_cpu_ratio": 1.074}
     assert "idle core-seconds at 2 workers 1.2" in "\n".join(e2e.summary_lines({
         "machine": {"cpus": 2, "load_average_1min_at_start": 0, "load_average_1min_at_end": 0},
         "startup": {"help_s": 0.1, "import_cli_s": 0.1, "bare_python_s": 0.1},
         "numba": {"kernels": 1, "first_process_compiled": 0, "second_process_compiled": 0},
-        "first_episode": {"wall_s": 1.0}, "evaluate": {"oracle": row},
+        "first_episode": {"wall_s": 1.0}, "evaluate": {"oracle": row}, "host": host,
         "generate": {"workers_1": {"wall_s": 1.0}, "workers_2": {"wall_s": 1.0}, "speedup_2_over_1": 1.0},
         "env": {"long_agent_steps_per_s": 1, "short_agent_steps_per_s": 1, "short_over_long": 1,
                 "reset_ms_same_scene": 1, "reset_ms_scene_seen_before": 1}}))
+
+
+def test_host_contention_runs_the_two_copies_together_and_compares_their_cpu(monkeypatch, tmp_path):
+    """Each command burns about 0.3 s of CPU and records when it ran: the two side-by-side copies overlap in
+    time, and each copy's own CPU is counted (not the pair's)."""
+    log = tmp_path / "log"
+    log.mkdir()
+    burn = ("import os, time; t0 = time.time(); end = time.process_time() + 0.3\n"
+            "while time.process_time() < end: pass\n"
+            f"open(os.path.join({str(log)!r}, str(os.getpid())), 'w').write(f'{{t0}} {{time.time()}}')\n")
+
+    def fake_cmd(baseline, out, *extra):
+        return [sys.executable, "-c", burn]
+
+    monkeypatch.setattr(e2e, "_evaluate_cmd", fake_cmd)
+    doc = e2e.host_contention(tmp_path, 1, None)
+    assert len(doc["alone_runs_cpu_s"]) == 1 and len(doc["side_by_side_runs_cpu_s"]) == 2
+    assert all(0.25 < c < 2.0 for c in doc["alone_runs_cpu_s"] + doc["side_by_side_runs_cpu_s"])
+    alone, first, second = sorted(tuple(map(float, f.read_text().split())) for f in log.iterdir())
+    assert alone[1] <= first[0] and second[0] < first[1]  # the pair started after the lone run, together
+    assert doc["side_by_side_cpu_ratio"] == round(doc["cpu_side_by_side_s"] / doc["cpu_alone_s"], 3)
+
+
+def test_a_side_by_side_command_that_fails_is_named(tmp_path):
+    with pytest.raises(RuntimeError, match="failed"):
+        e2e._side_by_side([[sys.executable, "-c", "pass"], [sys.executable, "-c", "raise SystemExit(3)"]])

@@ -13,6 +13,8 @@
   process that has imported the toolkit and loaded its kernels), which this benchmark starts before and stops
   after; and (full run) the oracle's 1- and 2-worker evaluations on their own and warm, interleaved
   (`warm_scaling`);
+- host: the oracle's one-worker evaluation alone and as two copies side by side (`host_contention`): how much
+  two busy processes slow each other on this machine, whatever the toolkit does;
 - demo: `main-bench demo` (full run only).
 
 Every figure is a median over repeats; the machine's load is recorded at the start and end (it is shared).
@@ -76,6 +78,12 @@ def _idle(runs: list[dict[str, Any]], workers: int) -> float | None:
     if any(r["cpu_s"] is None for r in runs):
         return None
     return round(statistics.median(workers * r["wall_s"] - r["cpu_s"] for r in runs), 3)
+
+
+def _ratio(a: list[dict[str, Any]], b: list[dict[str, Any]], key: str) -> float | None:
+    """Median of `a`'s `key` over median of `b`'s (None where a figure is missing)."""
+    top, bottom = _median(a, key), _median(b, key)
+    return None if top is None or not bottom else round(top / bottom, 3)
 
 
 def _cli() -> list[str]:
@@ -159,8 +167,44 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                      "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s"), "idle_core_s": _idle(runs[1], 1)},
                      "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s"), "idle_core_s": _idle(runs[2], 2)},
                      "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
+                     "cpu_ratio_2_over_1": _ratio(runs[2], runs[1], "cpu_s"),
                      "ratios": [round(a["wall_s"] / b["wall_s"], 2) for a, b in zip(runs[1], runs[2], strict=True)]}
     return out
+
+
+def _side_by_side(cmds: list[list[str]]) -> list[float]:
+    """Start `cmds` together and wait for each; the CPU seconds of each (with its waited-for children)."""
+    procs = [subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) for cmd in cmds]
+    cpu = []
+    for proc, cmd in zip(procs, cmds, strict=True):
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
+        if proc.returncode != 0:
+            raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {err.strip()[-400:]}")
+        cpu.append(usage.ru_utime + usage.ru_stime)
+    return cpu
+
+
+def host_contention(workdir: Path, repeats: int, limit: int | None) -> dict[str, Any]:
+    """CPU seconds of the oracle's one-worker evaluation of the sample's val split (`limit` per track) alone,
+    and of each of two copies started together (separate folders), interleaved `repeats` times. Their ratio is
+    what two busy processes cost each other on this machine (shared caches, memory, the host's other guests),
+    whatever the toolkit does: a two-worker run cannot use less extra CPU than that."""
+    alone: list[float] = []
+    side: list[float] = []
+    extra = [] if limit is None else ["--limit", str(limit)]
+    for rep in range(repeats):
+        dests = [workdir / f"contention-{rep}-{k}" for k in range(2)]
+        alone += _side_by_side([_evaluate_cmd("oracle", dests[0], "--workers", "1", *extra)])
+        shutil.rmtree(dests[0], ignore_errors=True)
+        side += _side_by_side([_evaluate_cmd("oracle", d, "--workers", "1", *extra) for d in dests])
+        for d in dests:
+            shutil.rmtree(d, ignore_errors=True)
+    a, b = statistics.median(alone), statistics.median(side)
+    return {"limit_per_track": limit, "cpu_alone_s": round(a, 3), "cpu_side_by_side_s": round(b, 3),
+            "side_by_side_cpu_ratio": round(b / a, 3), "alone_runs_cpu_s": [round(x, 2) for x in alone],
+            "side_by_side_runs_cpu_s": [round(x, 2) for x in side]}
 
 
 def warm_scaling(workdir: Path, repeats: int) -> dict[str, Any]:
@@ -285,6 +329,7 @@ def run(quick: bool = False) -> dict[str, Any]:
             "first_episode": first_episode(workdir, 1 if quick else 3),
             "evaluate": evaluate_scaling(workdir, BASELINES, 8 if quick else None, 4 if quick else 8,
                                          1 if quick else 2),
+            "host": host_contention(workdir, 1 if quick else 3, 8 if quick else None),
             "env": env_resets(300 if quick else 1500, 1 if quick else 3),
             "generate": generate_scaling(workdir, 2, 4 if quick else 20, 1 if quick else 2),
         }
@@ -301,6 +346,9 @@ def run(quick: bool = False) -> dict[str, Any]:
         "help_s_below": GOAL_HELP_S, "help_met": result["startup"]["help_goal_met"],
         "second_process_compiles_zero": result["numba"]["second_process_compiled"] == 0,
         "oracle_workers_ratio_at_least": GOAL_WORKERS_RATIO,
+        # the part of the gap to 2x that the host decides: two workers' extra CPU against two independent copies'
+        "oracle_workers_cpu_ratio": oracle.get("cpu_ratio_2_over_1"),
+        "host_side_by_side_cpu_ratio": result["host"]["side_by_side_cpu_ratio"],
         "oracle_workers_ratio_met": (oracle.get("speedup_2_over_1") or 0) >= GOAL_WORKERS_RATIO,
         "oracle_workers_ratio_met_warm": (result["warm"]["oracle_scaling"]["warm"]["speedup_2_over_1"]
                                           >= GOAL_WORKERS_RATIO) if "oracle_scaling" in result["warm"] else None,
@@ -324,6 +372,10 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
                      f"2 workers {row['workers_2']['wall_s']:.1f} s, speed-up {row['speedup_2_over_1']}x "
                      f"(CPU {row['workers_1']['cpu_s']:.1f} / {row['workers_2']['cpu_s']:.1f} s, "
                      f"idle core-seconds at 2 workers {row['workers_2']['idle_core_s']})")
+    h = result["host"]
+    lines.append(f"host: one-worker oracle evaluation, CPU alone {h['cpu_alone_s']:.1f} s, each of two side by side "
+                 f"{h['cpu_side_by_side_s']:.1f} s (x{h['side_by_side_cpu_ratio']}; two workers' CPU over one's: "
+                 f"x{result['evaluate'].get('oracle', {}).get('cpu_ratio_2_over_1')})")
     if "warm" in result:
         lines.append(f"warm server (MAIN_BENCH_WARM=1): first episode {result['warm']['first_episode']['wall_s']:.2f} s")
         for mode, row in ((m, result["warm"]["oracle_scaling"][m]) for m in ("cold", "warm")
