@@ -174,15 +174,19 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
 
 def _side_by_side(cmds: list[list[str]]) -> list[float]:
     """Start `cmds` together and wait for each; the CPU seconds of each (with its waited-for children)."""
-    procs = [subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) for cmd in cmds]
-    cpu = []
-    for proc, cmd in zip(procs, cmds, strict=True):
-        _, status, usage = os.wait4(proc.pid, 0)
-        proc.returncode = os.waitstatus_to_exitcode(status)
-        err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
-        if proc.returncode != 0:
-            raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {err.strip()[-400:]}")
-        cpu.append(usage.ru_utime + usage.ru_stime)
+    with contextlib.ExitStack() as stack:
+        errs = [stack.enter_context(tempfile.TemporaryFile()) for _ in cmds]  # a pipe could fill and stall them
+        procs = [subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err) for cmd, err in zip(cmds, errs, strict=True)]
+        cpu = []
+        for proc in procs:  # every one waited for before a failure is raised: none is left running
+            _, status, usage = os.wait4(proc.pid, 0)
+            proc.returncode = os.waitstatus_to_exitcode(status)
+            cpu.append(usage.ru_utime + usage.ru_stime)
+        for proc, cmd, err in zip(procs, cmds, errs, strict=True):
+            if proc.returncode != 0:
+                err.seek(0)
+                tail = err.read().decode(errors="replace").strip()[-400:]
+                raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {tail}")
     return cpu
 
 

@@ -34,7 +34,7 @@ OnMessage = Callable[[str, Any], None]
 #: the answer to a worker's ("ahead", k) when no chunk is handed out ahead: it asks again ("want") once idle
 NONE_AHEAD = False
 #: Seconds between a worker's live progress messages (the rest of a chunk's count comes with its report). A message
-#: per episode cost a two-worker oracle evaluation 0.45 CPU-seconds in thread wake-ups (`docs/speed.md`).
+#: per episode cost a two-worker oracle evaluation about 5k context switches of thread wake-ups (`docs/speed.md`).
 PROGRESS_INTERVAL_S = 0.25
 
 
