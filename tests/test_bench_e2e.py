@@ -114,3 +114,37 @@ def test_a_side_by_side_command_that_fails_is_named_once_the_others_have_ended(t
         e2e._side_by_side([[sys.executable, "-c", "import sys; print('boom', file=sys.stderr); raise SystemExit(3)"],
                            [sys.executable, "-c", slow]])
     assert done.read_text() == "ok"  # the other command was waited for, not left running
+
+
+def test_scaling_only_times_interleaved_oracle_pairs_of_the_whole_split(monkeypatch, tmp_path):
+    """`--scaling N`: N pairs, 1 then 2 workers, the oracle on the whole val split; the ratio of the medians, the
+    median of the pairs' ratios, the host's part, and whether the bar is met."""
+    walls = iter([10.0, 5.0, 12.0, 8.0, 11.0, 6.0])  # pairs 2.0, 1.5, 1.833: medians 11 / 6
+    commands = []
+
+    def fake_timed(cmd, env=None):
+        commands.append(cmd)
+        return {"wall_s": next(walls), "cpu_s": 9.0, "stdout": '{"episodes_run": 240, "workers_forked": true}'}
+
+    monkeypatch.setattr(e2e, "_timed", fake_timed)
+    monkeypatch.setattr(e2e, "host_contention", lambda workdir, repeats, limit: {
+        "repeats": repeats, "limit": limit, "cpu_alone_s": 9.0, "cpu_side_by_side_s": 9.5, "side_by_side_cpu_ratio": 1.056})
+    result = e2e.run(scaling=3)
+    assert [c[c.index("--workers") + 1] for c in commands] == ["1", "2"] * 3
+    assert all("baseline:oracle" in c and "--limit" not in c for c in commands)
+    row = result["evaluate"]["oracle"]
+    assert row["speedup_2_over_1"] == round(11 / 6, 2) and row["median_pair_ratio"] == round(11 / 6, 3)
+    assert row["ratios"] == [2.0, 1.5, 1.83]
+    assert result["host"]["repeats"] == 1 and result["host"]["limit"] is None
+    assert result["goals"]["oracle_workers_ratio_met"] is True
+    text = "\n".join(e2e.summary_lines(result))
+    assert "speed-up 1.83x" in text and "goal >= 1.8: met" in text and "x1.056" in text
+
+
+def test_the_scaling_option_reaches_the_benchmark_and_bad_counts_are_one_line(tmp_path):
+    import subprocess
+    from pathlib import Path
+
+    tool = Path(e2e.__file__).resolve().parents[2] / "tools" / "bench_e2e.py"
+    res = subprocess.run([sys.executable, str(tool), "--scaling", "0"], capture_output=True, text=True, check=False)
+    assert res.returncode == 2 and res.stderr.strip() == "error: --scaling needs at least 1 repeat, got 0"

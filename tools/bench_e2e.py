@@ -1,4 +1,5 @@
-"""End-to-end speed benchmark: `python tools/bench_e2e.py [--json] [--quick]` (see main_bench.benchmarks.e2e)."""
+"""End-to-end speed benchmark: `python tools/bench_e2e.py [--json] [--quick | --scaling N]` (see
+main_bench.benchmarks.e2e)."""
 
 from __future__ import annotations
 
@@ -6,4 +7,6 @@ from main_bench.benchmarks import tool_main
 from main_bench.benchmarks.e2e import run, summary_lines
 
 if __name__ == "__main__":
-    tool_main(__doc__, "few repeats, 8 episodes per track, no demo", run, lambda result: "\n".join(summary_lines(result)))
+    tool_main(__doc__, "few repeats, 8 episodes per track, no demo", run, lambda result: "\n".join(summary_lines(result)),
+              options=[("--scaling", {"dest": "scaling", "type": int, "default": None, "metavar": "N",
+                                      "help": "only the workers bar: N interleaved 1- and 2-worker oracle pairs"})])

@@ -6,7 +6,7 @@ import argparse
 import json
 import os
 import platform
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -40,9 +40,11 @@ def machine_done(machine: dict[str, Any]) -> dict[str, Any]:
 
 
 def tool_main(description: str, quick_help: str, run: Callable[..., dict[str, Any]],
-              render: Callable[[dict[str, Any]], str], gpu_option: bool = False) -> None:
+              render: Callable[[dict[str, Any]], str], gpu_option: bool = False,
+              options: Sequence[tuple[str, dict[str, Any]]] = ()) -> None:
     """Command line of a `tools/bench_*.py` script: `--quick` for a smoke run, `--json` for the full result,
-    and with `gpu_option` `--gpu N` (passed to `run` as gpu=N). Bad input: one line on stderr, exit 2."""
+    with `gpu_option` `--gpu N` (passed to `run` as gpu=N), and each of `options` (flag, argparse keywords with
+    a `dest`) passed to `run` by its dest. Bad input: one line on stderr, exit 2."""
     import sys
 
     from ..errors import MainBenchError
@@ -52,9 +54,12 @@ def tool_main(description: str, quick_help: str, run: Callable[..., dict[str, An
     parser.add_argument("--quick", action="store_true", help=quick_help)
     if gpu_option:
         parser.add_argument("--gpu", type=int, default=None, help="render on EGL device N (default: EGL's default)")
+    for flag, keywords in options:
+        parser.add_argument(flag, **keywords)
     args = parser.parse_args()
+    extra = {keywords["dest"]: getattr(args, keywords["dest"]) for _, keywords in options}
     try:
-        result = run(quick=args.quick, **({"gpu": args.gpu} if gpu_option else {}))
+        result = run(quick=args.quick, **({"gpu": args.gpu} if gpu_option else {}), **extra)
     except MainBenchError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None

@@ -17,6 +17,9 @@
   two busy processes slow each other on this machine, whatever the toolkit does;
 - demo: `main-bench demo` (full run only).
 
+`--scaling N` runs only the workers bar: the oracle's 1- and 2-worker evaluations, N interleaved pairs, and the
+host's contention (`scaling_only`).
+
 Every figure is a median over repeats; the machine's load is recorded at the start and end (it is shared).
 """
 
@@ -36,6 +39,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from ..errors import InputError
 from . import machine_done, machine_info
 
 BASELINES = ("random", "oracle", "comm")
@@ -168,7 +172,9 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                      "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s"), "idle_core_s": _idle(runs[2], 2)},
                      "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
                      "cpu_ratio_2_over_1": _ratio(runs[2], runs[1], "cpu_s"),
-                     "ratios": [round(a["wall_s"] / b["wall_s"], 2) for a, b in zip(runs[1], runs[2], strict=True)]}
+                     "ratios": [round(a["wall_s"] / b["wall_s"], 2) for a, b in zip(runs[1], runs[2], strict=True)],
+                     "median_pair_ratio": round(statistics.median(a["wall_s"] / b["wall_s"]
+                                                                  for a, b in zip(runs[1], runs[2], strict=True)), 3)}
     return out
 
 
@@ -321,9 +327,32 @@ def demo(workdir: Path) -> dict[str, Any]:
     return {"wall_s": round(run["wall_s"], 2), "cpu_s": round(run["cpu_s"], 2)}
 
 
-def run(quick: bool = False) -> dict[str, Any]:
+def scaling_only(repeats: int) -> dict[str, Any]:
+    """The workers bar alone: the oracle's evaluation of the sample's whole val split at 1 and 2 workers,
+    `repeats` interleaved pairs (the ratio of the medians and the median of the pairs' ratios), and the host's
+    side-by-side contention (a repeat per 4 pairs); JSON-ready figures."""
+    if repeats < 1:
+        raise InputError(f"--scaling needs at least 1 repeat, got {repeats}")
+    machine = machine_info()
+    workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
+    try:
+        oracle = evaluate_scaling(workdir, ("oracle",), None, 8, repeats)["oracle"]
+        host = host_contention(workdir, max(1, repeats // 4), None)
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+    return {"machine": machine_done(machine), "scaling_only": True, "evaluate": {"oracle": oracle}, "host": host,
+            "goals": {"oracle_workers_ratio_at_least": GOAL_WORKERS_RATIO,
+                      "oracle_workers_ratio_met": (oracle["speedup_2_over_1"] or 0) >= GOAL_WORKERS_RATIO,
+                      "oracle_workers_cpu_ratio": oracle["cpu_ratio_2_over_1"],
+                      "host_side_by_side_cpu_ratio": host["side_by_side_cpu_ratio"]}}
+
+
+def run(quick: bool = False, scaling: int | None = None) -> dict[str, Any]:
     """Run the benchmark (quick: few repeats, `--limit 8` evaluations, no demo; full: the whole val split of the
-    sample, `baseline:comm` on 8 episodes per track, 2 repeats); JSON-ready figures."""
+    sample, `baseline:comm` on 8 episodes per track, 2 repeats; `scaling` N: only `scaling_only(N)`);
+    JSON-ready figures."""
+    if scaling is not None:
+        return scaling_only(scaling)
     machine = machine_info()
     workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
     try:
@@ -362,15 +391,9 @@ def run(quick: bool = False) -> dict[str, Any]:
     return {"machine": machine_done(machine), "quick": quick, **result}
 
 
-def summary_lines(result: dict[str, Any]) -> list[str]:
-    """Human-readable lines of a `run` result."""
-    m, s, n = result["machine"], result["startup"], result["numba"]
-    lines = [f"machine: {m['cpus']} cpus, load {m['load_average_1min_at_start']} -> {m['load_average_1min_at_end']}",
-             f"start-up: --help {s['help_s']:.3f} s (goal < {GOAL_HELP_S}), import cli {s['import_cli_s']:.3f} s, "
-             f"bare python {s['bare_python_s']:.3f} s",
-             f"numba: {n['kernels']} kernels; compiled by the first process {n['first_process_compiled']}, "
-             f"by the second {n['second_process_compiled']}",
-             f"first episode (evaluate, one episode, oracle): {result['first_episode']['wall_s']:.2f} s"]
+def _scaling_lines(result: dict[str, Any]) -> list[str]:
+    """Lines of each evaluation's 1- and 2-worker figures and of the host's contention."""
+    lines = []
     for name, row in result["evaluate"].items():
         lines.append(f"evaluate baseline:{name} ({row['episodes']} episodes): 1 worker {row['workers_1']['wall_s']:.1f} s, "
                      f"2 workers {row['workers_2']['wall_s']:.1f} s, speed-up {row['speedup_2_over_1']}x "
@@ -380,6 +403,26 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
     lines.append(f"host: one-worker oracle evaluation, CPU alone {h['cpu_alone_s']:.1f} s, each of two side by side "
                  f"{h['cpu_side_by_side_s']:.1f} s (x{h['side_by_side_cpu_ratio']}; two workers' CPU over one's: "
                  f"x{result['evaluate'].get('oracle', {}).get('cpu_ratio_2_over_1')})")
+    return lines
+
+
+def summary_lines(result: dict[str, Any]) -> list[str]:
+    """Human-readable lines of a `run` result (a full or quick run, or `scaling_only`'s)."""
+    m = result["machine"]
+    machine = f"machine: {m['cpus']} cpus, load {m['load_average_1min_at_start']} -> {m['load_average_1min_at_end']}"
+    if result.get("scaling_only"):
+        row = result["evaluate"]["oracle"]
+        return [machine, *_scaling_lines(result),
+                f"pairs: {row['ratios']} (median {row['median_pair_ratio']}); goal >= {GOAL_WORKERS_RATIO}: "
+                f"{'met' if result['goals']['oracle_workers_ratio_met'] else 'not met'}"]
+    s, n = result["startup"], result["numba"]
+    lines = [machine,
+             f"start-up: --help {s['help_s']:.3f} s (goal < {GOAL_HELP_S}), import cli {s['import_cli_s']:.3f} s, "
+             f"bare python {s['bare_python_s']:.3f} s",
+             f"numba: {n['kernels']} kernels; compiled by the first process {n['first_process_compiled']}, "
+             f"by the second {n['second_process_compiled']}",
+             f"first episode (evaluate, one episode, oracle): {result['first_episode']['wall_s']:.2f} s",
+             *_scaling_lines(result)]
     if "warm" in result:
         lines.append(f"warm server (MAIN_BENCH_WARM=1): first episode {result['warm']['first_episode']['wall_s']:.2f} s")
         for mode, row in ((m, result["warm"]["oracle_scaling"][m]) for m in ("cold", "warm")
