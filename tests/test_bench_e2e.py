@@ -147,4 +147,4 @@ def test_the_scaling_option_reaches_the_benchmark_and_bad_counts_are_one_line(tm
 
     tool = Path(e2e.__file__).resolve().parents[2] / "tools" / "bench_e2e.py"
     res = subprocess.run([sys.executable, str(tool), "--scaling", "0"], capture_output=True, text=True, check=False)
-    assert res.returncode == 2 and res.stderr.strip() == "error: --scaling needs at least 1 repeat, got 0"
+    assert res.returncode == 2 and res.stderr.strip() == "error: --scaling 0: give 1 or more pairs of runs (10 or more on a noisy machine)"

@@ -332,7 +332,7 @@ def scaling_only(repeats: int) -> dict[str, Any]:
     `repeats` interleaved pairs (the ratio of the medians and the median of the pairs' ratios), and the host's
     side-by-side contention (a repeat per 4 pairs); JSON-ready figures."""
     if repeats < 1:
-        raise InputError(f"--scaling needs at least 1 repeat, got {repeats}")
+        raise InputError(f"--scaling {repeats}: give 1 or more pairs of runs (10 or more on a noisy machine)")
     machine = machine_info()
     workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
     try:
