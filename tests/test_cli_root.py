@@ -116,3 +116,25 @@ sys.exit(app.main([]))
     assert (busy.returncode, busy.stderr) == (130, "main-bench: interrupted\n")
     broken = subprocess.run([sys.executable, "-c", code, "broken"], capture_output=True, text=True, timeout=300)
     assert broken.returncode == 1 and "SystemError: not an interrupt" in broken.stderr
+
+
+def _chained(depth: int, root: BaseException) -> BaseException:
+    """`depth` SystemErrors, each raised from the one below, over `root` (as numba nests them)."""
+    exc = root
+    for _ in range(depth):
+        outer = SystemError("returned a result with an exception set")
+        outer.__cause__ = exc
+        exc = outer
+    return exc
+
+
+def test_an_interrupt_under_many_nested_numba_calls_is_still_an_interrupt():
+    """Ten nested SystemErrors over the KeyboardInterrupt were seen in CI (a kernel unpickling its constants when
+    the signal landed); the whole chain is searched, and a chain that loops ends."""
+    from main_bench.cli.app import _interrupted
+
+    assert _interrupted(_chained(12, KeyboardInterrupt()))
+    assert not _interrupted(_chained(12, ValueError("not an interrupt")))
+    loop = _chained(3, ValueError("x"))
+    loop.__cause__.__cause__.__cause__.__cause__ = loop  # type: ignore[union-attr]
+    assert not _interrupted(loop)

@@ -122,15 +122,16 @@ def main(argv: list[str] | None = None) -> int:
 
 def _interrupted(exc: BaseException) -> bool:
     """Whether `exc` comes of an interrupt: an interrupt that lands while a numba kernel runs surfaces as a
-    `SystemError` ("returned a result with an exception set") whose cause, one or two levels down, is the
-    `KeyboardInterrupt`."""
-    seen: BaseException | None = exc
-    for _ in range(8):
-        if seen is None:
-            return False
-        if isinstance(seen, KeyboardInterrupt):
+    `SystemError` ("returned a result with an exception set") whose cause, some levels down, is the
+    `KeyboardInterrupt`: one per nested numba call it crossed (ten were seen while a kernel unpickled its
+    constants), so the whole chain is searched."""
+    seen: set[int] = set()
+    link: BaseException | None = exc
+    while link is not None and id(link) not in seen:
+        if isinstance(link, KeyboardInterrupt):
             return True
-        seen = seen.__cause__ or seen.__context__
+        seen.add(id(link))
+        link = link.__cause__ or link.__context__
     return False
 
 
