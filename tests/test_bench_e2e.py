@@ -83,7 +83,8 @@ def test_evaluate_scaling_reports_the_core_seconds_each_command_left_idle(monkey
         "startup": {"help_s": 0.1, "import_cli_s": 0.1, "bare_python_s": 0.1},
         "numba": {"kernels": 1, "first_process_compiled": 0, "second_process_compiled": 0},
         "first_episode": {"wall_s": 1.0}, "evaluate": {"oracle": row}, "host": host,
-        "generate": {"workers_1": {"wall_s": 1.0}, "workers_2": {"wall_s": 1.0}, "speedup_2_over_1": 1.0},
+        "generate": {"sample_val": {"episodes": 240, "workers_1": {"wall_s": 1.0}, "workers_2": {"wall_s": 1.0},
+                                    "speedup_2_over_1": 1.0, "median_pair_ratio": 1.0}},
         "env": {"long_agent_steps_per_s": 1, "short_agent_steps_per_s": 1, "short_over_long": 1,
                 "reset_ms_same_scene": 1, "reset_ms_scene_seen_before": 1}}))
 
@@ -156,12 +157,57 @@ def test_a_speed_up_that_rounds_to_the_bar_does_not_meet_it(monkeypatch):
     assert result["goals"]["oracle_workers_ratio_met"] is False
 
 
-def test_the_scaling_option_reaches_the_benchmark_and_bad_counts_are_one_line():
+@pytest.mark.parametrize(("flag", "line"), [
+    ("--scaling", "error: --scaling 0: give 1 or more pairs of runs (10 or more on a noisy machine)"),
+    ("--generate-scaling", "error: --generate-scaling 0: give 1 or more pairs of runs (5 or more on a noisy machine)")])
+def test_the_scaling_options_reach_the_benchmark_and_bad_counts_are_one_line(flag, line):
     tool = Path(e2e.__file__).resolve().parents[2] / "tools" / "bench_e2e.py"
-    res = subprocess.run([sys.executable, str(tool), "--scaling", "0"], capture_output=True, text=True, check=False)
-    assert res.returncode == 2 and res.stderr.strip() == "error: --scaling 0: give 1 or more pairs of runs (10 or more on a noisy machine)"
+    res = subprocess.run([sys.executable, str(tool), flag, "0"], capture_output=True, text=True, check=False)
+    assert res.returncode == 2 and res.stderr.strip() == line
+
+
+def test_generate_scaling_alone_judges_each_job_on_its_medians(monkeypatch):
+    monkeypatch.setattr(e2e, "generate_scaling", lambda workdir, quick, repeats: {
+        name: {"episodes": 240, "workers_1": {"wall_s": w1}, "workers_2": {"wall_s": 10.0}, "speedup_2_over_1": 1.8,
+               "median_pair_ratio": 1.8, "repeats": repeats, "quick": quick}
+        for name, w1 in (("sample_val", 17.96), ("builtin", 18.0))})
+    result = e2e.run(generate_scaling_pairs=4)
+    assert result["generate"]["builtin"]["repeats"] == 4 and result["generate"]["builtin"]["quick"] is False
+    assert result["goals"]["generate_workers_ratio_met"] == {"sample_val": False, "builtin": True}
+    text = "\n".join(e2e.summary_lines(result))
+    assert "episodes generate, builtin (240 episodes): 1 worker 18.0 s, 2 workers 10.0 s" in text
 
 
 def test_the_warm_goal_is_judged_on_the_medians_too():
     assert e2e._bar_met(17.96, 10.0) is False  # printed 1.8
     assert e2e._bar_met(18.0, 10.0) is True
+
+
+@pytest.mark.parametrize("quick", [True, False])
+def test_generate_scaling_times_each_job_in_interleaved_pairs_after_one_unmeasured_run(monkeypatch, tmp_path, quick):
+    """The sample's val split made again (its houses, per-scene count, agents and seed; 4 per scene when quick)
+    and, in a full run, the default job on every built-in house: one warm-up, then 1- and 2-worker pairs."""
+    commands = []
+    walls = iter([9.0, 4.0, 2.0, 3.0, 1.5, 6.0, 4.0] * 2)  # per job: warm-up, then pairs 2.0, 2.0, 1.5
+
+    def fake_timed(cmd, env=None):
+        commands.append(cmd)
+        return {"wall_s": next(walls), "cpu_s": 1.0, "stdout": '{"produced": 240}'}
+
+    monkeypatch.setattr(e2e, "_timed", fake_timed)
+    doc = e2e.generate_scaling(tmp_path, quick, 3)
+    assert list(doc) == (["sample_val"] if quick else ["sample_val", "builtin"])
+    per_job = [commands[k:k + 7] for k in range(0, len(commands), 7)]
+    for job in per_job:
+        assert [c[c.index("--workers") + 1] for c in job] == ["2", "1", "2", "1", "2", "1", "2"]
+        assert len({c[c.index("--out") + 1] for c in job}) == 7
+    sample = per_job[0][0]
+    assert [sample[i + 1] for i, a in enumerate(sample) if a == "--scenes"] == [
+        str(p) for p in e2e._generate_jobs(quick)["sample_val"]["args"][1:4:2]]
+    assert sample[sample.index("--per-scene") + 1] == ("4" if quick else "20")
+    assert sample[sample.index("--agents") + 1] == "2,3,4" and sample[sample.index("--split") + 1] == "val"
+    if not quick:
+        assert per_job[1][0][per_job[1][0].index("--scenes") + 1] == "builtin"
+    row = doc["sample_val"]
+    assert row["workers_1"]["wall_s"] == 4.0 and row["workers_2"]["wall_s"] == 2.0
+    assert row["ratios"] == [2.0, 2.0, 1.5] and row["median_pair_ratio"] == 2.0 and row["episodes"] == 240

@@ -1,5 +1,5 @@
-"""End-to-end speed benchmark: `python tools/bench_e2e.py [--json] [--quick | --scaling N]` (see
-main_bench.benchmarks.e2e)."""
+"""End-to-end speed benchmark: `python tools/bench_e2e.py [--json] [--quick | --scaling N | --generate-scaling N]`
+(see main_bench.benchmarks.e2e)."""
 
 from __future__ import annotations
 
@@ -9,4 +9,7 @@ from main_bench.benchmarks.e2e import run, summary_lines
 if __name__ == "__main__":
     tool_main(__doc__, "few repeats, 8 episodes per track, no demo", run, lambda result: "\n".join(summary_lines(result)),
               options=[("--scaling", {"dest": "scaling", "type": int, "default": None, "metavar": "N",
-                                      "help": "only the workers bar: N interleaved 1- and 2-worker oracle pairs"})])
+                                      "help": "only the workers bar: N interleaved 1- and 2-worker oracle pairs"}),
+                       ("--generate-scaling", {"dest": "generate_scaling_pairs", "type": int, "default": None,
+                                               "metavar": "N", "help": "only the workers bar of episodes generate: "
+                                               "N interleaved 1- and 2-worker pairs of each job"})])

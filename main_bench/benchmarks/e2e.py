@@ -4,7 +4,8 @@
 - numba: kernels a second process compiles (`compiles.py`'s workload run twice on this machine's cache);
 - evaluate: `main-bench evaluate` on the committed sample's val split with each baseline, at 1 and 2 local
   workers (wall and CPU seconds of the whole command, the 2-worker speed-up printed); repeats interleaved;
-- episodes generate: `main-bench episodes generate` on built-in houses at 1 and 2 workers;
+- episodes generate: `main-bench episodes generate` at 1 and 2 workers, of the sample's val split made again
+  (240 episodes, mostly start-up) and (full run) of a default job on every built-in house (16,000 episodes);
 - env: the PettingZoo env's agent-steps per second with move-only actions (long episodes) and uniform random
   actions (short episodes: an agent soon calls `found`), interleaved, after a warm-up that starts every episode
   once (a long training run's steady state: every simulator and target field made); reset times within a scene
@@ -18,7 +19,8 @@
 - demo: `main-bench demo` (full run only).
 
 `--scaling N` runs only the workers bar: the oracle's 1- and 2-worker evaluations, N interleaved pairs, and the
-host's contention (`scaling_only`).
+host's contention (`scaling_only`); `--generate-scaling N`, only its generation side: both generate jobs, N
+pairs each (`generate_only`).
 
 Every figure is a median over repeats; the machine's load is recorded at the start and end (it is shared).
 """
@@ -255,25 +257,58 @@ def first_episode(workdir: Path, repeats: int, env: dict[str, str] | None = None
     return {"wall_s": _median(runs, "wall_s"), "cpu_s": _median(runs, "cpu_s")}
 
 
-def generate_scaling(workdir: Path, houses: int, per_scene: int, repeats: int) -> dict[str, Any]:
-    """`main-bench episodes generate` on the first `houses` built-in val houses at 1 and 2 workers."""
+def _generate_jobs(quick: bool) -> dict[str, dict[str, Any]]:
+    """The `episodes generate` jobs timed: `sample_val`, the committed sample's val split made again (its val
+    houses and settings: 240 episodes; quick: 4 per scene and track), and, in a full run, `builtin`, a
+    researcher's default job (every built-in house with the built-in split file, default settings: 16,000
+    episodes). Per job: what it is and its command's arguments before `--out`."""
+    from ..episodes.manifest import read_manifest
     from ..scenes import builtin
 
-    ids = [i for i in builtin.builtin_split().scene_ids if builtin.builtin_split().split_of(i) == "val"][:houses]
+    sample = read_manifest(_sample())
+    ids = sorted(i for i, entry in sample.scenes.items() if entry.split == "val")
     paths = builtin.ensure_builtin_scenes(ids, builtin.default_cache_dir())
-    runs: dict[int, list[dict]] = {1: [], 2: []}
-    for rep in range(repeats):
-        for workers in (1, 2):
-            dest = workdir / f"gen-{workers}-{rep}"
-            runs[workers].append(_timed(
-                [*_cli(), "episodes", "generate", *[a for i in ids for a in ("--scenes", str(paths[i]))],
-                 "--out", str(dest), "--per-scene", str(per_scene), "--agents", "2,3", "--workers", str(workers),
-                 "--json"]))
-            shutil.rmtree(dest, ignore_errors=True)
-    w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
-    return {"houses": ids, "per_scene": per_scene, "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
-            "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
-            "speedup_2_over_1": round(w1 / w2, 2) if w2 else None}
+    per_scene = 4 if quick else sample.settings.per_scene
+    agents = ",".join(map(str, sample.settings.agents))
+    jobs = {"sample_val": {
+        "what": f"the sample's val split: houses {', '.join(ids)}, {per_scene} per scene, task both, agents {agents}",
+        "args": [*[a for i in ids for a in ("--scenes", str(paths[i]))], "--split", "val", "--per-scene",
+                 str(per_scene), "--agents", agents, "--seed", str(sample.settings.seed)]}}
+    if not quick:
+        split_file = Path(__file__).resolve().parents[2] / "episodes" / "splits" / "builtin.json"
+        jobs["builtin"] = {"what": "every built-in house, the built-in split file, default settings",
+                           "args": ["--scenes", "builtin", "--splits", str(split_file)]}
+    return jobs
+
+
+def generate_scaling(workdir: Path, quick: bool, repeats: int) -> dict[str, Any]:
+    """`main-bench episodes generate` of each job (`_generate_jobs`) at 1 and 2 workers, pairs interleaved after
+    one unmeasured run (it builds the navmesh cache a user's later runs find): median wall and CPU seconds, the
+    ratio of the medians and the median of the pairs' ratios, episodes made."""
+    out: dict[str, Any] = {}
+    for name, job in _generate_jobs(quick).items():
+        def cmd(workers: int, dest: Path, job: dict[str, Any] = job) -> list[str]:
+            return [*_cli(), "episodes", "generate", *job["args"], "--out", str(dest), "--workers", str(workers),
+                    "--json"]
+
+        _timed(cmd(2, workdir / f"gen-{name}-warmup"))
+        shutil.rmtree(workdir / f"gen-{name}-warmup", ignore_errors=True)
+        runs: dict[int, list[dict]] = {1: [], 2: []}
+        for rep in range(repeats):
+            for workers in (1, 2):
+                dest = workdir / f"gen-{name}-{workers}-{rep}"
+                run = _timed(cmd(workers, dest))
+                run["episodes"] = json.loads(run["stdout"])["produced"]
+                runs[workers].append(run)
+                shutil.rmtree(dest, ignore_errors=True)
+        w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
+        pairs = [a["wall_s"] / b["wall_s"] for a, b in zip(runs[1], runs[2], strict=True)]
+        out[name] = {"what": job["what"], "episodes": runs[1][0]["episodes"],
+                     "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
+                     "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
+                     "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
+                     "ratios": [round(r, 2) for r in pairs], "median_pair_ratio": round(statistics.median(pairs), 3)}
+    return out
 
 
 def _env_pass(env: Any, mode: str, agent_steps: int, rng: Any) -> dict[str, Any]:
@@ -352,12 +387,35 @@ def scaling_only(repeats: int) -> dict[str, Any]:
                       "host_side_by_side_cpu_ratio": host["side_by_side_cpu_ratio"]}}
 
 
-def run(quick: bool = False, scaling: int | None = None) -> dict[str, Any]:
+def generate_only(repeats: int) -> dict[str, Any]:
+    """The generation side of the workers bar alone: `generate_scaling` of both jobs with `repeats` interleaved
+    pairs each; JSON-ready figures."""
+    if repeats < 1:
+        raise InputError(f"--generate-scaling {repeats}: give 1 or more pairs of runs (5 or more on a noisy machine)")
+    machine = machine_info()
+    workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
+    try:
+        generate = generate_scaling(workdir, False, repeats)
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+    return {"machine": machine_done(machine), "generate_scaling_only": True, "generate": generate,
+            "goals": {"generate_workers_ratio_at_least": GOAL_WORKERS_RATIO,
+                      "generate_workers_ratio_met": _generate_met(generate)}}
+
+
+def _generate_met(generate: dict[str, Any]) -> dict[str, bool]:
+    """Per `episodes generate` job: whether its medians meet the workers bar (the oracle evaluation's)."""
+    return {name: _bar_met(row["workers_1"]["wall_s"], row["workers_2"]["wall_s"]) for name, row in generate.items()}
+
+
+def run(quick: bool = False, scaling: int | None = None, generate_scaling_pairs: int | None = None) -> dict[str, Any]:
     """Run the benchmark (quick: few repeats, `--limit 8` evaluations, no demo; full: the whole val split of the
-    sample, `baseline:comm` on 8 episodes per track, 2 repeats; `scaling` N: only `scaling_only(N)`);
-    JSON-ready figures."""
+    sample, `baseline:comm` on 8 episodes per track, 2 repeats; `scaling` N: only `scaling_only(N)`;
+    `generate_scaling_pairs` N: only `generate_only(N)`); JSON-ready figures."""
     if scaling is not None:
         return scaling_only(scaling)
+    if generate_scaling_pairs is not None:
+        return generate_only(generate_scaling_pairs)
     machine = machine_info()
     workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
     try:
@@ -369,7 +427,7 @@ def run(quick: bool = False, scaling: int | None = None) -> dict[str, Any]:
                                          1 if quick else 2),
             "host": host_contention(workdir, 1 if quick else 3, 8 if quick else None),
             "env": env_resets(300 if quick else 1500, 1 if quick else 3),
-            "generate": generate_scaling(workdir, 2, 4 if quick else 20, 1 if quick else 2),
+            "generate": generate_scaling(workdir, quick, 1 if quick else 3),
         }
         with warm_server() as env:
             result["warm"] = {"first_episode": first_episode(workdir, 1 if quick else 3, env)}
@@ -392,6 +450,7 @@ def run(quick: bool = False, scaling: int | None = None) -> dict[str, Any]:
                                     if oracle else False,
         "oracle_workers_ratio_met_warm": (_bar_met(warm["workers_1_wall_s"], warm["workers_2_wall_s"])
                                           if warm else None),
+        "generate_workers_ratio_met": _generate_met(result["generate"]),
         "env_short_over_long_at_least": GOAL_SHORT_OVER_LONG,
         "env_short_over_long_met": result["env"]["short_over_long"] >= GOAL_SHORT_OVER_LONG,
     }
@@ -413,10 +472,19 @@ def _scaling_lines(result: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _generate_lines(generate: dict[str, Any]) -> list[str]:
+    """A line per `episodes generate` job: its 1- and 2-worker medians and speed-ups."""
+    return [f"episodes generate, {name} ({g['episodes']} episodes): 1 worker {g['workers_1']['wall_s']:.1f} s, "
+            f"2 workers {g['workers_2']['wall_s']:.1f} s, speed-up {g['speedup_2_over_1']}x "
+            f"(median pair {g['median_pair_ratio']}; goal >= {GOAL_WORKERS_RATIO})" for name, g in generate.items()]
+
+
 def summary_lines(result: dict[str, Any]) -> list[str]:
     """Human-readable lines of a `run` result (a full or quick run, or `scaling_only`'s)."""
     m = result["machine"]
     machine = f"machine: {m['cpus']} cpus, load {m['load_average_1min_at_start']} -> {m['load_average_1min_at_end']}"
+    if result.get("generate_scaling_only"):
+        return [machine, *_generate_lines(result["generate"])]
     if result.get("scaling_only"):
         row = result["evaluate"]["oracle"]
         return [machine, *_scaling_lines(result),
@@ -436,9 +504,7 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
                           if "oracle_scaling" in result["warm"]):
             lines.append(f"  oracle, {mode}, interleaved: 1 worker {row['workers_1_wall_s']:.1f} s, 2 workers "
                          f"{row['workers_2_wall_s']:.1f} s, speed-up {row['speedup_2_over_1']}x")
-    g = result["generate"]
-    lines.append(f"episodes generate: 1 worker {g['workers_1']['wall_s']:.1f} s, 2 workers {g['workers_2']['wall_s']:.1f} s, "
-                 f"speed-up {g['speedup_2_over_1']}x")
+    lines += _generate_lines(result["generate"])
     e = result["env"]
     lines.append(f"env: long {e['long_agent_steps_per_s']} agent-steps/s, short {e['short_agent_steps_per_s']}, "
                  f"short/long {e['short_over_long']} (goal >= {GOAL_SHORT_OVER_LONG}); reset "

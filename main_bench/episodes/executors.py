@@ -19,31 +19,48 @@ Unit = Callable[[dict[str, Any]], list[dict[str, Any]]]
 
 
 def run_units(fn: Unit, specs: list[dict[str, Any]], *, executor: str = "local", workers: int = 1,
-              ray_address: str | None = None, progress: Callable[[int], None] | None = None) -> list[dict]:
-    """Run `fn` on every spec; concatenated results in spec order. `progress(n)` gets each unit's episode count."""
+              ray_address: str | None = None, progress: Callable[[int], None] | None = None,
+              weights: list[float] | None = None) -> list[dict]:
+    """Run `fn` on every spec; concatenated results in spec order. `progress(n)` gets each unit's episode count.
+
+    `weights`: each unit's expected cost (any unit). Units then start heaviest first, so that the last ones to
+    finish are light and the workers end together (longest-processing-time-first); None: in spec order. The
+    order changes no result."""
     tick = progress or (lambda n: None)
     sizes = [sum(s["count"] for s in spec["shards"]) for spec in specs]
+    order = start_order(len(specs), weights)
     if executor == "ray":
-        results = _run_ray(fn, specs, sizes, ray_address, tick)
+        results = _run_ray(fn, specs, sizes, order, ray_address, tick)
     elif workers <= 1 or len(specs) <= 1:
-        results = []
-        for spec, size in zip(specs, sizes, strict=True):
-            results.append(fn(spec))
-            tick(size)
+        results = [None] * len(specs)
+        for i in order:
+            results[i] = fn(specs[i])
+            tick(sizes[i])
     else:
-        results = _run_pool(fn, specs, sizes, workers, tick)
+        results = _run_pool(fn, specs, sizes, order, workers, tick)
     return [entry for unit in results for entry in unit]
 
 
-def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick: Callable[[int], None]) -> list:
-    """`workers - 1` pool processes take units from the front of the list, one at a time each, while this
-    process (one more worker, with nothing to start) takes them from the back. The processes are forked where
-    `fork_is_safe()` (they then start with this process's imports); otherwise spawned."""
+def start_order(n: int, weights: list[float] | None) -> list[int]:
+    """Indices of `n` units in the order they start: heaviest first (ties in spec order); spec order without
+    weights."""
+    if weights is None:
+        return list(range(n))
+    if len(weights) != n:
+        raise ValueError(f"{len(weights)} weights for {n} units")
+    return sorted(range(n), key=lambda i: (-weights[i], i))
+
+
+def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], order: list[int], workers: int,
+              tick: Callable[[int], None]) -> list:
+    """`workers - 1` pool processes and this process (one more worker, with nothing to start) take units one at
+    a time each, in `order`, whoever is free first. The processes are forked where `fork_is_safe()` (they then
+    start with this process's imports); otherwise spawned."""
     results: list[Any] = [None] * len(specs)
     procs = min(workers - 1, len(specs))
     ctx = multiprocessing.get_context("fork" if fork_is_safe() else "spawn")
     lock = threading.RLock()  # a done callback can run at once, in the thread that holds it
-    bounds = {"front": 0, "back": len(specs)}  # units [front, back) are not claimed yet
+    bounds = {"next": 0, "end": len(order)}  # order[next:end] are not claimed yet
     futures: dict[Any, int] = {}
 
     with single_threaded_children(), ProcessPoolExecutor(max_workers=procs, mp_context=ctx) as pool:
@@ -52,9 +69,9 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick:
             with lock:
                 if any(f.done() and not f.cancelled() and f.exception() is not None for f in futures):
                     return  # a unit failed: the error is raised below, nothing more starts
-                while sum(not f.done() for f in futures) < procs and bounds["front"] < bounds["back"]:
-                    i = bounds["front"]
-                    bounds["front"] += 1
+                while sum(not f.done() for f in futures) < procs and bounds["next"] < bounds["end"]:
+                    i = order[bounds["next"]]
+                    bounds["next"] += 1
                     fut = pool.submit(fn, specs[i])
                     futures[fut] = i
                     fut.add_done_callback(top_up)
@@ -64,7 +81,7 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick:
         def collect(block: bool) -> bool:
             """Take the results of finished pool units (raising a unit's error); False when none is left."""
             with lock:
-                if bounds["front"] < bounds["back"]:
+                if bounds["next"] < bounds["end"]:
                     top_up()  # a done callback may not have run yet: start the next unit here
                 pending = [f for f in futures if f not in reported]
             if not pending:
@@ -80,10 +97,10 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick:
             top_up()
             while True:
                 with lock:
-                    if bounds["front"] >= bounds["back"]:
+                    if bounds["next"] >= bounds["end"]:
                         break
-                    bounds["back"] -= 1
-                    i = bounds["back"]
+                    i = order[bounds["next"]]
+                    bounds["next"] += 1
                 results[i] = fn(specs[i])
                 tick(sizes[i])
                 collect(block=False)
@@ -91,13 +108,13 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], workers: int, tick:
                 pass
         except BaseException:
             with lock:
-                bounds["front"] = bounds["back"]  # no more submissions
+                bounds["next"] = bounds["end"]  # no more submissions
             pool.shutdown(wait=True, cancel_futures=True)
             raise
     return results
 
 
-def _run_ray(fn: Unit, specs: list[dict], sizes: list[int], address: str | None,
+def _run_ray(fn: Unit, specs: list[dict], sizes: list[int], order: list[int], address: str | None,
              tick: Callable[[int], None]) -> list:
     try:
         import ray
@@ -113,8 +130,8 @@ def _run_ray(fn: Unit, specs: list[dict], sizes: list[int], address: str | None,
         started_here = True
     try:
         remote = ray.remote(fn)
-        refs = [remote.remote(spec) for spec in specs]
-        index = {ref: i for i, ref in enumerate(refs)}
+        index = {remote.remote(specs[i]): i for i in order}  # submitted in `order`: the heaviest first
+        refs = list(index)
         results: list[Any] = [None] * len(specs)
         pending = list(refs)
         while pending:
