@@ -98,6 +98,12 @@ def _ratio(a: list[dict[str, Any]], b: list[dict[str, Any]], key: str) -> float 
     return None if top is None or not bottom else round(top / bottom, 3)
 
 
+def _pair_ratios(walls_1: list[float], walls_2: list[float]) -> dict[str, Any]:
+    """Each interleaved pair's 1-worker over 2-worker wall (rounded to 2 places) and their median (3 places)."""
+    pairs = [a / b for a, b in zip(walls_1, walls_2, strict=True)]
+    return {"ratios": [round(r, 2) for r in pairs], "median_pair_ratio": round(statistics.median(pairs), 3)}
+
+
 def _cli() -> list[str]:
     return [sys.executable, "-m", "main_bench.cli.app"]
 
@@ -175,13 +181,12 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                 runs[workers].append(run)
                 shutil.rmtree(dest, ignore_errors=True)
         w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
-        pairs = [a["wall_s"] / b["wall_s"] for a, b in zip(runs[1], runs[2], strict=True)]
         out[name] = {"episodes": runs[1][0]["episodes"], "limit_per_track": lim,
                      "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s"), "idle_core_s": _idle(runs[1], 1)},
                      "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s"), "idle_core_s": _idle(runs[2], 2)},
                      "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
                      "cpu_ratio_2_over_1": _ratio(runs[2], runs[1], "cpu_s"),
-                     "ratios": [round(r, 2) for r in pairs], "median_pair_ratio": round(statistics.median(pairs), 3)}
+                     **_pair_ratios([r["wall_s"] for r in runs[1]], [r["wall_s"] for r in runs[2]])}
     return out
 
 
@@ -239,10 +244,10 @@ def warm_scaling(workdir: Path, repeats: int) -> dict[str, Any]:
     out: dict[str, Any] = {"runs": runs}
     for mode in ("cold", "warm"):
         one, two = runs[f"{mode}_workers_1"], runs[f"{mode}_workers_2"]
-        pairs = [a / b for a, b in zip(one, two, strict=True)]
+        pairs = _pair_ratios(one, two)
         out[mode] = {"workers_1_wall_s": statistics.median(one), "workers_2_wall_s": statistics.median(two),
                      "speedup_2_over_1": round(statistics.median(one) / statistics.median(two), 3),
-                     "pair_ratios": [round(r, 2) for r in pairs], "median_pair_ratio": round(statistics.median(pairs), 3)}
+                     "pair_ratios": pairs["ratios"], "median_pair_ratio": pairs["median_pair_ratio"]}
     return out
 
 
@@ -302,12 +307,11 @@ def generate_scaling(workdir: Path, quick: bool, repeats: int) -> dict[str, Any]
                 runs[workers].append(run)
                 shutil.rmtree(dest, ignore_errors=True)
         w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
-        pairs = [a["wall_s"] / b["wall_s"] for a, b in zip(runs[1], runs[2], strict=True)]
         out[name] = {"what": job["what"], "episodes": runs[1][0]["episodes"],
                      "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
                      "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
                      "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
-                     "ratios": [round(r, 2) for r in pairs], "median_pair_ratio": round(statistics.median(pairs), 3)}
+                     **_pair_ratios([r["wall_s"] for r in runs[1]], [r["wall_s"] for r in runs[2]])}
     return out
 
 
@@ -480,7 +484,7 @@ def _generate_lines(generate: dict[str, Any]) -> list[str]:
 
 
 def summary_lines(result: dict[str, Any]) -> list[str]:
-    """Human-readable lines of a `run` result (a full or quick run, or `scaling_only`'s)."""
+    """Human-readable lines of a `run` result (a full or quick run, or `scaling_only`'s or `generate_only`'s)."""
     m = result["machine"]
     machine = f"machine: {m['cpus']} cpus, load {m['load_average_1min_at_start']} -> {m['load_average_1min_at_end']}"
     if result.get("generate_scaling_only"):
