@@ -104,6 +104,25 @@ def _pair_ratios(walls_1: list[float], walls_2: list[float]) -> dict[str, Any]:
     return {"ratios": [round(r, 2) for r in pairs], "median_pair_ratio": round(statistics.median(pairs), 3)}
 
 
+@contextlib.contextmanager
+def _workdir() -> Iterator[Path]:
+    """A temporary folder for the benchmark's outputs, removed afterwards."""
+    workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
+    try:
+        yield workdir
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+
+
+def _pairs_row(runs: dict[int, list[dict[str, Any]]]) -> dict[str, Any]:
+    """1- and 2-worker medians (wall, CPU) of interleaved runs, the speed-up of the medians and the pairs'."""
+    w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
+    return {"workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
+            "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
+            "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
+            **_pair_ratios([r["wall_s"] for r in runs[1]], [r["wall_s"] for r in runs[2]])}
+
+
 def _cli() -> list[str]:
     return [sys.executable, "-m", "main_bench.cli.app"]
 
@@ -180,13 +199,11 @@ def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | Non
                     run["cpu_s"] += float(doc.get("worker_cpu_seconds", 0.0))  # children: they report their CPU
                 runs[workers].append(run)
                 shutil.rmtree(dest, ignore_errors=True)
-        w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
-        out[name] = {"episodes": runs[1][0]["episodes"], "limit_per_track": lim,
-                     "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s"), "idle_core_s": _idle(runs[1], 1)},
-                     "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s"), "idle_core_s": _idle(runs[2], 2)},
-                     "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
-                     "cpu_ratio_2_over_1": _ratio(runs[2], runs[1], "cpu_s"),
-                     **_pair_ratios([r["wall_s"] for r in runs[1]], [r["wall_s"] for r in runs[2]])}
+        row = _pairs_row(runs)
+        for workers in (1, 2):
+            row[f"workers_{workers}"]["idle_core_s"] = _idle(runs[workers], workers)
+        out[name] = {"episodes": runs[1][0]["episodes"], "limit_per_track": lim, **row,
+                     "cpu_ratio_2_over_1": _ratio(runs[2], runs[1], "cpu_s")}
     return out
 
 
@@ -306,12 +323,7 @@ def generate_scaling(workdir: Path, quick: bool, repeats: int) -> dict[str, Any]
                 run["episodes"] = json.loads(run["stdout"])["produced"]
                 runs[workers].append(run)
                 shutil.rmtree(dest, ignore_errors=True)
-        w1, w2 = _median(runs[1], "wall_s"), _median(runs[2], "wall_s")
-        out[name] = {"what": job["what"], "episodes": runs[1][0]["episodes"],
-                     "workers_1": {"wall_s": w1, "cpu_s": _median(runs[1], "cpu_s")},
-                     "workers_2": {"wall_s": w2, "cpu_s": _median(runs[2], "cpu_s")},
-                     "speedup_2_over_1": round(w1 / w2, 2) if w2 else None,
-                     **_pair_ratios([r["wall_s"] for r in runs[1]], [r["wall_s"] for r in runs[2]])}
+        out[name] = {"what": job["what"], "episodes": runs[1][0]["episodes"], **_pairs_row(runs)}
     return out
 
 
@@ -378,12 +390,9 @@ def scaling_only(repeats: int) -> dict[str, Any]:
     if repeats < 1:
         raise InputError(f"--scaling {repeats}: give 1 or more pairs of runs (10 or more on a noisy machine)")
     machine = machine_info()
-    workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
-    try:
+    with _workdir() as workdir:
         oracle = evaluate_scaling(workdir, ("oracle",), None, 8, repeats)["oracle"]
         host = host_contention(workdir, max(1, repeats // 4), None)
-    finally:
-        shutil.rmtree(workdir, ignore_errors=True)
     return {"machine": machine_done(machine), "scaling_only": True, "evaluate": {"oracle": oracle}, "host": host,
             "goals": {"oracle_workers_ratio_at_least": GOAL_WORKERS_RATIO,
                       "oracle_workers_ratio_met": _bar_met(oracle["workers_1"]["wall_s"], oracle["workers_2"]["wall_s"]),
@@ -397,11 +406,8 @@ def generate_only(repeats: int) -> dict[str, Any]:
     if repeats < 1:
         raise InputError(f"--generate-scaling {repeats}: give 1 or more pairs of runs (5 or more on a noisy machine)")
     machine = machine_info()
-    workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
-    try:
+    with _workdir() as workdir:
         generate = generate_scaling(workdir, False, repeats)
-    finally:
-        shutil.rmtree(workdir, ignore_errors=True)
     return {"machine": machine_done(machine), "generate_scaling_only": True, "generate": generate,
             "goals": {"generate_workers_ratio_at_least": GOAL_WORKERS_RATIO,
                       "generate_workers_ratio_met": _generate_met(generate)}}
@@ -421,8 +427,7 @@ def run(quick: bool = False, scaling: int | None = None, generate_scaling_pairs:
     if generate_scaling_pairs is not None:
         return generate_only(generate_scaling_pairs)
     machine = machine_info()
-    workdir = Path(tempfile.mkdtemp(prefix="mb-bench-e2e-"))
-    try:
+    with _workdir() as workdir:
         result: dict[str, Any] = {
             "startup": startup(5 if quick else 15),
             "numba": compiles(),
@@ -437,10 +442,7 @@ def run(quick: bool = False, scaling: int | None = None, generate_scaling_pairs:
             result["warm"] = {"first_episode": first_episode(workdir, 1 if quick else 3, env)}
         if not quick:
             result["warm"]["oracle_scaling"] = warm_scaling(workdir, 4)
-        if not quick:
             result["demo"] = demo(workdir)
-    finally:
-        shutil.rmtree(workdir, ignore_errors=True)
     oracle = result["evaluate"].get("oracle", {})
     warm = result["warm"].get("oracle_scaling", {}).get("warm")  # full runs only
     result["goals"] = {

@@ -72,7 +72,7 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
 
     out = Path(spec["out"])
     shards = [Shard(**s) for s in spec["shards"]]
-    todo = [s for s in shards if not (out / s.rel_path).is_file()]
+    todo = shards_to_sample(spec)
     made: dict[str, dict] = {}
     if todo:
         made = _sample_shards(spec, todo)
@@ -96,12 +96,18 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
     return entries
 
 
+def shards_to_sample(spec: dict[str, Any]) -> list[Shard]:
+    """The unit's shards whose file is not written yet (a rerun reuses the others)."""
+    out = Path(spec["out"])
+    shards = [Shard(**s) for s in spec["shards"]]
+    return [s for s in shards if not (out / s.rel_path).is_file()]
+
+
 def unit_weight(spec: dict[str, Any]) -> float:
     """A work unit's expected cost, to start the heaviest first: the episodes it has still to sample times its
     scene file's size in bytes (a proxy for the navmesh's extent: over the 40 built-in houses a unit's time
     correlates 0.84 with its file's size, `docs/speed.md`). A unit with nothing left to sample weighs 0."""
-    out = Path(spec["out"])
-    todo = sum(s["count"] for s in spec["shards"] if not (out / Shard(**s).rel_path).is_file())
+    todo = sum(shard.count for shard in shards_to_sample(spec))
     try:
         size = Path(spec["scene_path"]).stat().st_size
     except OSError:  # the unit reports a missing scene itself
