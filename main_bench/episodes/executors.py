@@ -60,7 +60,7 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], order: list[int], w
     procs = min(workers - 1, len(specs))
     ctx = multiprocessing.get_context("fork" if fork_is_safe() else "spawn")
     lock = threading.RLock()  # a done callback can run at once, in the thread that holds it
-    bounds = {"next": 0, "end": len(order)}  # order[next:end] are not claimed yet
+    claimed = {"next": 0}  # order[next:] are not claimed yet
     futures: dict[Any, int] = {}
 
     with single_threaded_children(), ProcessPoolExecutor(max_workers=procs, mp_context=ctx) as pool:
@@ -69,9 +69,9 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], order: list[int], w
             with lock:
                 if any(f.done() and not f.cancelled() and f.exception() is not None for f in futures):
                     return  # a unit failed: the error is raised below, nothing more starts
-                while sum(not f.done() for f in futures) < procs and bounds["next"] < bounds["end"]:
-                    i = order[bounds["next"]]
-                    bounds["next"] += 1
+                while sum(not f.done() for f in futures) < procs and claimed["next"] < len(order):
+                    i = order[claimed["next"]]
+                    claimed["next"] += 1
                     fut = pool.submit(fn, specs[i])
                     futures[fut] = i
                     fut.add_done_callback(top_up)
@@ -81,7 +81,7 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], order: list[int], w
         def collect(block: bool) -> bool:
             """Take the results of finished pool units (raising a unit's error); False when none is left."""
             with lock:
-                if bounds["next"] < bounds["end"]:
+                if claimed["next"] < len(order):
                     top_up()  # a done callback may not have run yet: start the next unit here
                 pending = [f for f in futures if f not in reported]
             if not pending:
@@ -97,10 +97,10 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], order: list[int], w
             top_up()
             while True:
                 with lock:
-                    if bounds["next"] >= bounds["end"]:
+                    if claimed["next"] >= len(order):
                         break
-                    i = order[bounds["next"]]
-                    bounds["next"] += 1
+                    i = order[claimed["next"]]
+                    claimed["next"] += 1
                 results[i] = fn(specs[i])
                 tick(sizes[i])
                 collect(block=False)
@@ -108,7 +108,7 @@ def _run_pool(fn: Unit, specs: list[dict], sizes: list[int], order: list[int], w
                 pass
         except BaseException:
             with lock:
-                bounds["next"] = bounds["end"]  # no more submissions
+                claimed["next"] = len(order)  # no more submissions
             pool.shutdown(wait=True, cancel_futures=True)
             raise
     return results

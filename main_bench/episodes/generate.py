@@ -72,7 +72,7 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
 
     out = Path(spec["out"])
     shards = [Shard(**s) for s in spec["shards"]]
-    todo = shards_to_sample(spec)
+    todo = shards_to_sample(out, shards)
     made: dict[str, dict] = {}
     if todo:
         made = _sample_shards(spec, todo)
@@ -96,10 +96,8 @@ def run_unit(spec: dict[str, Any]) -> list[dict[str, Any]]:
     return entries
 
 
-def shards_to_sample(spec: dict[str, Any]) -> list[Shard]:
-    """The unit's shards whose file is not written yet (a rerun reuses the others)."""
-    out = Path(spec["out"])
-    shards = [Shard(**s) for s in spec["shards"]]
+def shards_to_sample(out: Path, shards: list[Shard]) -> list[Shard]:
+    """The `shards` whose file is not written yet under `out` (a rerun reuses the others)."""
     return [s for s in shards if not (out / s.rel_path).is_file()]
 
 
@@ -107,7 +105,7 @@ def unit_weight(spec: dict[str, Any]) -> float:
     """A work unit's expected cost, to start the heaviest first: the episodes it has still to sample times its
     scene file's size in bytes (a proxy for the navmesh's extent: over the 40 built-in houses a unit's time
     correlates 0.84 with its file's size, `docs/speed.md`). A unit with nothing left to sample weighs 0."""
-    todo = sum(shard.count for shard in shards_to_sample(spec))
+    todo = sum(shard.count for shard in shards_to_sample(Path(spec["out"]), [Shard(**s) for s in spec["shards"]]))
     try:
         size = Path(spec["scene_path"]).stat().st_size
     except OSError:  # the unit reports a missing scene itself
