@@ -2,23 +2,8 @@
 
 from __future__ import annotations
 
-import functools
-
 __all__ = ["__version__"]
 
-
-@functools.cache
-def _installed_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("main-bench")
-    except PackageNotFoundError:  # running from a source tree that is not installed
-        return "0.0.0+unknown"
-
-
-def __getattr__(name: str) -> str:
-    # The version is looked up on first use: importlib.metadata costs about 70 ms of every start-up otherwise.
-    if name == "__version__":
-        return _installed_version()
-    raise AttributeError(f"module 'main_bench' has no attribute {name!r}")
+#: The toolkit's version: its one source (`pyproject.toml` reads it from here when the package is built), so a
+#: command knows it without importing `importlib.metadata` and searching `sys.path` for the installed metadata.
+__version__ = "0.1.0"

@@ -22,11 +22,55 @@ Two code-generation aids for the hot loops (`docs/navmesh.md`, "numba's bookkeep
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from types import MappingProxyType
+from typing import Any
 
-from numba import njit, uint64
+import numba
+from numba import uint64
 
 __all__ = ["NO_REFCOUNTS", "import_numpy_support", "njit", "uix"]
+
+
+def njit(*args: Any, **options: Any) -> Any:
+    """numba's `njit` (as `@njit` or `@njit(**options)`); a kernel with `cache=True` loads from numba's on-disk
+    cache without refreshing numba's target context first (`light_cache_loads`)."""
+    if len(args) == 1 and callable(args[0]) and not options:
+        return light_cache_loads(numba.njit(args[0]))
+    decorate = numba.njit(*args, **options)
+    return lambda func: light_cache_loads(decorate(func))
+
+
+def light_cache_loads(dispatcher: Any) -> Any:
+    """Make `dispatcher`'s cache loads skip numba's `target_context.refresh()`; returns the dispatcher.
+
+    Before loading a cached kernel, numba refreshes its CPU target: it imports and installs every typing and
+    lowering registry it has (numpy, random, linalg, unicode, ...), about 0.15 s of each process's start on the
+    project's 2-core VM (`docs/speed.md`), serial before the first episode. A loaded kernel needs none of them:
+    they type and lower source code, and numba's compiler refreshes the target itself before it compiles
+    (`numba.core.compiler.compile_extra`), so a cache miss compiles as before. What a loaded kernel does need is
+    numba's runtime (NRT: allocation of the arrays it returns), which the refresh would have started; this load
+    starts it. numba's own cache-load steps are kept (the index, the stamp of the source, the I/O guard). Where a
+    numba release lacks one of the private methods this relies on, the dispatcher is left as numba made it."""
+    cache = getattr(dispatcher, "_cache", None)
+    load = getattr(cache, "_load_overload", None)
+    guard = getattr(cache, "_guard_against_spurious_io_errors", None)
+    if load is None or guard is None:
+        return dispatcher
+    cache.load_overload = _load_overload_light(load, guard)
+    return dispatcher
+
+
+def _load_overload_light(load: Callable[[Any, Any], Any], guard: Callable[[], Any]) -> Callable[[Any, Any], Any]:
+    def load_overload(sig: Any, target_context: Any) -> Any:
+        from numba.core.runtime import rtsys
+
+        rtsys.initialize(target_context)
+        with guard():
+            return load(sig, target_context)
+        return None  # the guard swallowed an I/O error: numba then compiles, as on a miss
+
+    return load_overload
 
 
 def _no_refcounts() -> dict[str, bool]:

@@ -211,3 +211,26 @@ def test_generate_scaling_times_each_job_in_interleaved_pairs_after_one_unmeasur
     row = doc["sample_val"]
     assert row["workers_1"]["wall_s"] == 4.0 and row["workers_2"]["wall_s"] == 2.0
     assert row["ratios"] == [2.0, 2.0, 1.5] and row["median_pair_ratio"] == 2.0 and row["episodes"] == 240
+
+
+def test_the_machine_says_whether_the_toolkit_loads_from_cached_bytecode(monkeypatch, tmp_path):
+    """`toolkit_bytecode_cached` looks for the `.pyc` of the CLI module, which every command imports; without
+    one the summary says every command compiles the toolkit from source."""
+    import importlib.util
+
+    from main_bench.benchmarks import machine_info, toolkit_bytecode_cached
+
+    pyc = tmp_path / "app.cpython-311.pyc"
+    monkeypatch.setattr(importlib.util, "cache_from_source", lambda path: str(pyc))
+    assert toolkit_bytecode_cached() is False and machine_info()["toolkit_bytecode_cached"] is False
+    pyc.write_bytes(b"")
+    assert toolkit_bytecode_cached() is True
+    machine = {"cpus": 2, "load_average_1min_at_start": 0, "load_average_1min_at_end": 0}
+    row = {"ratios": [1.8], "median_pair_ratio": 1.8}
+    result = {"machine": machine, "scaling_only": True, "evaluate": {"oracle": row},
+              "goals": {"oracle_workers_ratio_met": True}}
+    monkeypatch.setattr(e2e, "_scaling_lines", lambda result: [])
+    assert "compiled from source" not in e2e.summary_lines(result)[0]
+    machine["toolkit_bytecode_cached"] = False
+    assert "compiled from source in every command" in e2e.summary_lines(result)[0]
+

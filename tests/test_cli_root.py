@@ -23,6 +23,17 @@ def test_version(cli):
     assert r.out.strip() == f"main-bench {main_bench.__version__}"
 
 
+def test_the_version_has_one_source_and_needs_no_metadata_lookup():
+    """The installed metadata's version is the package's `__version__` (pyproject reads it from there), and
+    knowing it imports no `importlib.metadata` (a look-up in every evaluation's start before)."""
+    from importlib.metadata import version
+
+    assert version("main-bench") == main_bench.__version__
+    code = "import sys, main_bench; v = main_bench.__version__; print('importlib.metadata' in sys.modules)"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == "False"
+
+
 def test_bad_input_is_one_line_exit_2_without_traceback(tmp_path):
     missing = tmp_path / "nope.glb"
     proc = subprocess.run([sys.executable, "-m", "main_bench.cli.app", "scenes", "info", str(missing)],

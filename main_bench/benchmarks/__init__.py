@@ -27,11 +27,26 @@ def _load() -> float | None:
     return round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None
 
 
+def toolkit_bytecode_cached() -> bool:
+    """Whether the toolkit's modules load from cached bytecode (`.pyc`) rather than being compiled from source
+    by every process: an editable install (the README's) under `PYTHONDONTWRITEBYTECODE=1` compiles them in every
+    command, 0.06 s of an evaluation's start on the project's 2-core VM (`docs/speed.md`)."""
+    import importlib.util
+
+    import main_bench.cli.app as cli  # every command imports it
+
+    try:
+        return Path(importlib.util.cache_from_source(cli.__file__)).is_file()
+    except NotImplementedError:  # an interpreter without bytecode caching
+        return False
+
+
 def machine_info(**extra: Any) -> dict[str, Any]:
     """The machine as a benchmark result records it, with the 1-minute load average now; `machine_done` adds
     the load at the end (this machine may be shared, and wall times follow its load)."""
     return {"cpus": usable_cpus(), "platform": platform.platform(), "processor": platform.machine(),
-            "python": platform.python_version(), **extra, "load_average_1min_at_start": _load()}
+            "python": platform.python_version(), "toolkit_bytecode_cached": toolkit_bytecode_cached(), **extra,
+            "load_average_1min_at_start": _load()}
 
 
 def machine_done(machine: dict[str, Any]) -> dict[str, Any]:

@@ -489,6 +489,8 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
     """Human-readable lines of a `run` result (a full or quick run, or `scaling_only`'s or `generate_only`'s)."""
     m = result["machine"]
     machine = f"machine: {m['cpus']} cpus, load {m['load_average_1min_at_start']} -> {m['load_average_1min_at_end']}"
+    if m.get("toolkit_bytecode_cached") is False:
+        machine += "; the toolkit's modules are compiled from source in every command (no cached bytecode)"
     if result.get("generate_scaling_only"):
         return [machine, *_generate_lines(result["generate"])]
     if result.get("scaling_only"):
