@@ -1,6 +1,7 @@
 """numba's `njit` for this package's kernels, with numba's numpy support imported without its BLAS probe.
 
-numba imports `numba.np.arraymath` when a process loads its first kernel. At import, that module asks whether a
+numba imports `numba.np.arraymath` when it first refreshes its target, before it compiles a kernel (and, but for
+`light_cache_loads` below, before it loads one from its cache). At import, that module asks whether a
 BLAS is available by importing `scipy.linalg` (about 0.1 s of a command's start on the project's 2-core VM,
 `docs/speed.md`). No kernel here needs a BLAS: none calls `np.dot`, `np.linalg`, `@`, `np.correlate` or
 `np.convolve`. So `njit` comes from here, and importing this module imports `numba.np.arraymath` with
@@ -9,6 +10,9 @@ BLAS is available by importing `scipy.linalg` (about 0.1 s of a command's start 
 What changes for other numba code in the same process: `np.correlate` and `np.convolve` of floats use numba's
 own loop instead of BLAS (same results). Whatever else needs a BLAS (`np.dot` of matrices, `np.linalg`) still
 imports `scipy.linalg` when it is compiled, as before. `scipy.linalg` itself imports normally afterwards.
+
+Its `njit` also makes each cached kernel load without numba's target refresh (`light_cache_loads`), which
+imports and installs registries that only compiling uses.
 
 Two code-generation aids for the hot loops (`docs/navmesh.md`, "numba's bookkeeping"):
 
@@ -33,20 +37,24 @@ __all__ = ["NO_REFCOUNTS", "import_numpy_support", "njit", "uix"]
 
 
 def njit(*args: Any, **options: Any) -> Any:
-    """numba's `njit` (as `@njit` or `@njit(**options)`); a kernel with `cache=True` loads from numba's on-disk
-    cache without refreshing numba's target context first (`light_cache_loads`)."""
-    if len(args) == 1 and callable(args[0]) and not options:
-        return light_cache_loads(numba.njit(args[0]))
-    decorate = numba.njit(*args, **options)
-    return lambda func: light_cache_loads(decorate(func))
+    """numba's `njit`, in any of its forms (`@njit`, `@njit(**options)`, `njit(func, **options)`); a kernel with
+    `cache=True` loads from numba's on-disk cache without refreshing numba's target context first
+    (`light_cache_loads`)."""
+    from numba.core.dispatcher import Dispatcher
+
+    made = numba.njit(*args, **options)
+    if isinstance(made, Dispatcher):
+        return light_cache_loads(made)
+    return lambda func: light_cache_loads(made(func))
 
 
 def light_cache_loads(dispatcher: Any) -> Any:
     """Make `dispatcher`'s cache loads skip numba's `target_context.refresh()`; returns the dispatcher.
 
     Before loading a cached kernel, numba refreshes its CPU target: it imports and installs every typing and
-    lowering registry it has (numpy, random, linalg, unicode, ...), about 0.15 s of each process's start on the
-    project's 2-core VM (`docs/speed.md`), serial before the first episode. A loaded kernel needs none of them:
+    lowering registry it has (numpy, random, linalg, unicode, ...). Loading an evaluation's kernels took 0.135 s
+    with it and takes 0.042 s without it on the project's 2-core VM (`docs/speed.md`), before every process's
+    first episode. A loaded kernel needs none of them:
     they type and lower source code, and numba's compiler refreshes the target itself before it compiles
     (`numba.core.compiler.compile_extra`), so a cache miss compiles as before. What a loaded kernel does need is
     numba's runtime (NRT: allocation of the arrays it returns), which the refresh would have started; this load

@@ -153,3 +153,15 @@ def test_cached_kernels_load_without_refreshing_numba_and_a_cache_miss_still_com
     assert second[1] == first[1] and second[1][0] == 0.0 and max(second[1]) > 0.0
     assert second[2] == first[2] == [4, -1, 0]
     assert second[3] is True  # the new signature compiled, refreshing the target as numba does
+
+
+def test_every_form_of_njit_gives_cached_kernels_the_light_load_and_leaves_uncached_ones_alone():
+    def twice(x):
+        return 2 * x
+
+    light = "_load_overload_light"
+    for made in (njit(twice, cache=True), njit(cache=True)(twice), njit(cache=True, **NO_REFCOUNTS)(twice)):
+        assert light in made._cache.load_overload.__qualname__
+    for made in (njit(twice), njit()(twice), njit(twice, cache=False)):
+        assert light not in getattr(made._cache.load_overload, "__qualname__", "")
+        assert made(3) == 6
