@@ -233,4 +233,3 @@ def test_the_machine_says_whether_the_toolkit_loads_from_cached_bytecode(monkeyp
     assert "compiled from source" not in e2e.summary_lines(result)[0]
     machine["toolkit_bytecode_cached"] = False
     assert "compiled from source in every command" in e2e.summary_lines(result)[0]
-
