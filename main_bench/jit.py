@@ -32,6 +32,7 @@ from typing import Any
 
 import numba
 from numba import uint64
+from numba.core.dispatcher import Dispatcher
 
 __all__ = ["NO_REFCOUNTS", "import_numpy_support", "njit", "uix"]
 
@@ -40,8 +41,6 @@ def njit(*args: Any, **options: Any) -> Any:
     """numba's `njit`, in any of its forms (`@njit`, `@njit(**options)`, `njit(func, **options)`); a kernel with
     `cache=True` loads from numba's on-disk cache without refreshing numba's target context first
     (`light_cache_loads`)."""
-    from numba.core.dispatcher import Dispatcher
-
     made = numba.njit(*args, **options)
     if isinstance(made, Dispatcher):
         return light_cache_loads(made)
@@ -54,12 +53,12 @@ def light_cache_loads(dispatcher: Any) -> Any:
     Before loading a cached kernel, numba refreshes its CPU target: it imports and installs every typing and
     lowering registry it has (numpy, random, linalg, unicode, ...). Loading an evaluation's kernels took 0.135 s
     with it and takes 0.042 s without it on the project's 2-core VM (`docs/speed.md`), before every process's
-    first episode. A loaded kernel needs none of them:
-    they type and lower source code, and numba's compiler refreshes the target itself before it compiles
-    (`numba.core.compiler.compile_extra`), so a cache miss compiles as before. What a loaded kernel does need is
-    numba's runtime (NRT: allocation of the arrays it returns), which the refresh would have started; this load
-    starts it. numba's own cache-load steps are kept (the index, the stamp of the source, the I/O guard). Where a
-    numba release lacks one of the private methods this relies on, the dispatcher is left as numba made it."""
+    first episode. A loaded kernel needs none of them: they type and lower source code, and numba's compiler
+    refreshes the target itself before it compiles (`numba.core.compiler.compile_extra`), so a cache miss
+    compiles as before. What a loaded kernel does need is numba's runtime (NRT: allocation of the arrays it
+    returns), which the refresh would have started; this load starts it. numba's own cache-load steps are kept
+    (the index, the stamp of the source, the I/O guard). Where a numba release lacks one of the private methods
+    this relies on, the dispatcher is left as numba made it."""
     cache = getattr(dispatcher, "_cache", None)
     load = getattr(cache, "_load_overload", None)
     guard = getattr(cache, "_guard_against_spurious_io_errors", None)

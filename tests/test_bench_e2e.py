@@ -214,8 +214,8 @@ def test_generate_scaling_times_each_job_in_interleaved_pairs_after_one_unmeasur
 
 
 def test_the_machine_says_whether_the_toolkit_loads_from_cached_bytecode(monkeypatch, tmp_path):
-    """`toolkit_bytecode_cached` looks for the `.pyc` of the CLI module, which every command imports; without
-    one the summary says every command compiles the toolkit from source."""
+    """`toolkit_bytecode_cached` looks for the `.pyc` of the package's `__init__`, which every process imports;
+    without one the summary says every command compiles the toolkit from source."""
     import importlib.util
 
     from main_bench.benchmarks import machine_info, toolkit_bytecode_cached
