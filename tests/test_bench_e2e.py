@@ -98,7 +98,7 @@ def test_host_contention_runs_the_two_copies_together_and_compares_their_cpu(mon
             "while time.process_time() < end: pass\n"
             f"open(os.path.join({str(log)!r}, str(os.getpid())), 'w').write(f'{{t0}} {{time.time()}}')\n")
 
-    def fake_cmd(baseline, out, *extra):
+    def fake_cmd(baseline, out, *extra, split="val"):
         return [sys.executable, "-c", burn]
 
     monkeypatch.setattr(e2e, "_evaluate_cmd", fake_cmd)
@@ -130,11 +130,14 @@ def test_scaling_only_times_interleaved_oracle_pairs_of_the_whole_split(monkeypa
         return {"wall_s": next(walls), "cpu_s": 9.0, "stdout": '{"episodes_run": 240, "workers_forked": true}'}
 
     monkeypatch.setattr(e2e, "_timed", fake_timed)
-    monkeypatch.setattr(e2e, "host_contention", lambda workdir, repeats, limit: {
-        "repeats": repeats, "limit": limit, "cpu_alone_s": 9.0, "cpu_side_by_side_s": 9.5, "side_by_side_cpu_ratio": 1.056})
+    monkeypatch.setattr(e2e, "host_contention", lambda workdir, repeats, limit, split: {
+        "repeats": repeats, "limit": limit, "split": split, "cpu_alone_s": 9.0, "cpu_side_by_side_s": 9.5,
+        "side_by_side_cpu_ratio": 1.056})
     result = e2e.run(scaling=3)
     assert [c[c.index("--workers") + 1] for c in commands] == ["1", "2"] * 3
     assert all("baseline:oracle" in c and "--limit" not in c for c in commands)
+    assert {c[c.index("--split") + 1] for c in commands} == {"val"} and result["split"] == "val"
+    assert result["host"]["split"] == "val"
     row = result["evaluate"]["oracle"]
     assert row["speedup_2_over_1"] == round(11 / 6, 2) and row["median_pair_ratio"] == round(11 / 6, 3)
     assert row["ratios"] == [2.0, 1.5, 1.83]
@@ -151,18 +154,42 @@ def test_a_speed_up_that_rounds_to_the_bar_does_not_meet_it(monkeypatch):
         return {"wall_s": next(walls), "cpu_s": 9.0, "stdout": '{"episodes_run": 240, "workers_forked": true}'}
 
     monkeypatch.setattr(e2e, "_timed", fake_timed)
-    monkeypatch.setattr(e2e, "host_contention", lambda workdir, repeats, limit: {"side_by_side_cpu_ratio": 1.0})
+    monkeypatch.setattr(e2e, "host_contention", lambda workdir, repeats, limit, split: {"side_by_side_cpu_ratio": 1.0})
     result = e2e.run(scaling=1)
     assert result["evaluate"]["oracle"]["speedup_2_over_1"] == 1.8
     assert result["goals"]["oracle_workers_ratio_met"] is False
 
 
-@pytest.mark.parametrize(("flag", "line"), [
-    ("--scaling", "error: --scaling 0: give 1 or more pairs of runs (10 or more on a noisy machine)"),
-    ("--generate-scaling", "error: --generate-scaling 0: give 1 or more pairs of runs (5 or more on a noisy machine)")])
-def test_the_scaling_options_reach_the_benchmark_and_bad_counts_are_one_line(flag, line):
+def test_scaling_on_another_split_evaluates_it_and_leaves_the_bar_to_val(monkeypatch):
+    """`--scaling N --split test`: the same pairs and host measurement on the test split's houses; the bar is
+    judged on val only, so the other split's result says so instead of met or not met."""
+    commands, contention = [], []
+
+    def fake_timed(cmd, env=None):
+        commands.append(cmd)
+        return {"wall_s": 10.0 if cmd[cmd.index("--workers") + 1] == "1" else 5.0, "cpu_s": 9.0,
+                "stdout": '{"episodes_run": 240, "workers_forked": true}'}
+
+    monkeypatch.setattr(e2e, "_timed", fake_timed)
+    monkeypatch.setattr(e2e, "host_contention", lambda workdir, repeats, limit, split: contention.append(split) or {
+        "cpu_alone_s": 9.0, "cpu_side_by_side_s": 9.0, "side_by_side_cpu_ratio": 1.0})
+    result = e2e.run(scaling=2, split="test")
+    assert {c[c.index("--split") + 1] for c in commands} == {"test"} and contention == ["test"]
+    assert result["split"] == "test" and result["evaluate"]["oracle"]["speedup_2_over_1"] == 2.0
+    assert result["goals"]["oracle_workers_ratio_met"] is None
+    text = "\n".join(e2e.summary_lines(result))
+    assert "split: test" in text and "judged on the val split" in text and "not met" not in text
+
+
+@pytest.mark.parametrize(("args", "line"), [
+    (["--scaling", "0"], "error: --scaling 0: give 1 or more pairs of runs (10 or more on a noisy machine)"),
+    (["--generate-scaling", "0"],
+     "error: --generate-scaling 0: give 1 or more pairs of runs (5 or more on a noisy machine)"),
+    (["--scaling", "1", "--split", "dev"], "error: --split 'dev': the sample's splits are train, val, test"),
+    (["--split", "test"], "error: --split test: it chooses the split of --scaling; give --scaling N too")])
+def test_the_scaling_options_reach_the_benchmark_and_bad_counts_are_one_line(args, line):
     tool = Path(e2e.__file__).resolve().parents[2] / "tools" / "bench_e2e.py"
-    res = subprocess.run([sys.executable, str(tool), flag, "0"], capture_output=True, text=True, check=False)
+    res = subprocess.run([sys.executable, str(tool), *args], capture_output=True, text=True, check=False)
     assert res.returncode == 2 and res.stderr.strip() == line
 
 

@@ -1,5 +1,5 @@
-"""End-to-end speed benchmark: `python tools/bench_e2e.py [--json] [--quick | --scaling N | --generate-scaling N]`
-(see main_bench.benchmarks.e2e)."""
+"""End-to-end speed benchmark: `python tools/bench_e2e.py [--json] [--quick | --scaling N [--split S] |
+--generate-scaling N]` (see main_bench.benchmarks.e2e)."""
 
 from __future__ import annotations
 
@@ -12,4 +12,7 @@ if __name__ == "__main__":
                                       "help": "only the workers bar: N interleaved 1- and 2-worker oracle pairs"}),
                        ("--generate-scaling", {"dest": "generate_scaling_pairs", "type": int, "default": None,
                                                "metavar": "N", "help": "only the workers bar of episodes generate: "
-                                               "N interleaved 1- and 2-worker pairs of each job"})])
+                                               "N interleaved 1- and 2-worker pairs of each job"}),
+                       ("--split", {"dest": "split", "default": None, "metavar": "S",
+                                    "help": "with --scaling: the sample's split to evaluate (train, val, test; "
+                                    "default val, the bar's)"})])
