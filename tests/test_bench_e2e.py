@@ -185,7 +185,7 @@ def test_scaling_on_another_split_evaluates_it_and_leaves_the_bar_to_val(monkeyp
     (["--scaling", "0"], "error: --scaling 0: give 1 or more pairs of runs (10 or more on a noisy machine)"),
     (["--generate-scaling", "0"],
      "error: --generate-scaling 0: give 1 or more pairs of runs (5 or more on a noisy machine)"),
-    (["--scaling", "1", "--split", "dev"], "error: --split 'dev': the sample's splits are train, val, test"),
+    (["--scaling", "1", "--split", "dev"], "error: --split dev: the sample's splits are train, val, test"),
     (["--split", "test"], "error: --split test: it chooses the split of --scaling; give --scaling N too")])
 def test_the_scaling_options_reach_the_benchmark_and_bad_counts_are_one_line(args, line):
     tool = Path(e2e.__file__).resolve().parents[2] / "tools" / "bench_e2e.py"

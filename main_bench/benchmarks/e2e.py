@@ -180,10 +180,10 @@ def warm_server() -> Iterator[dict[str, str]]:
 
 def evaluate_scaling(workdir: Path, baselines: tuple[str, ...], limit: int | None, comm_limit: int,
                      repeats: int, env: dict[str, str] | None = None, split: str = BAR_SPLIT) -> dict[str, Any]:
-    """`main-bench evaluate` of the sample's `split` at 1 and 2 workers per baseline: medians (wall, CPU, and idle core-seconds: what the
-    serial start and end leave unused, the part of the speed-up the code controls) and the 2-worker speed-up. With `env` from
-    `warm_server`, the commands run in the server's children, whose CPU time is not counted here (cpu_s None,
-    `_timed`)."""
+    """`main-bench evaluate` of the sample's `split` at 1 and 2 workers per baseline: medians (wall, CPU, and idle
+    core-seconds: what the serial start and end leave unused, the part of the speed-up the code controls) and the
+    2-worker speed-up. With `env` from `warm_server`, the commands run in the server's children, whose CPU time is
+    not counted here (cpu_s None, `_timed`)."""
     out: dict[str, Any] = {}
     for name in baselines:
         lim = comm_limit if name == "comm" else limit
@@ -395,7 +395,7 @@ def scaling_only(repeats: int, split: str = BAR_SPLIT) -> dict[str, Any]:
     if repeats < 1:
         raise InputError(f"--scaling {repeats}: give 1 or more pairs of runs (10 or more on a noisy machine)")
     if split not in SPLITS:
-        raise InputError(f"--split {split!r}: the sample's splits are {', '.join(SPLITS)}")
+        raise InputError(f"--split {split}: the sample's splits are {', '.join(SPLITS)}")
     machine = machine_info()
     with _workdir() as workdir:
         oracle = evaluate_scaling(workdir, ("oracle",), None, 8, repeats, split=split)["oracle"]
