@@ -12,7 +12,7 @@ from . import _graph, _raster
 from .settings import NavMeshSettings
 
 #: Bumped whenever the build's output for the same inputs changes; part of the cache key.
-ALGORITHM_VERSION = 4
+ALGORITHM_VERSION = 5
 #: Nodes are kept when their centre is at least agent_radius - ERODE_SLACK * cell_size from the nearest
 #: obstacle (walls located within their cell, see `_graph.blocking_rects`); near obstacles, distances are
 #: measured through points moved onto the agent_radius contour (`anchor_offsets`). 0.5 gave the smallest
