@@ -6,7 +6,6 @@ import re
 from pathlib import Path
 
 import pytest
-
 from mb_testing import REPO
 
 DOCS = REPO / "docs"
