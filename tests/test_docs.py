@@ -69,7 +69,16 @@ def test_the_speed_page_is_one_page():
 
 
 _MD_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
-_CODE_PATH = re.compile(r"`((?:docs|tools|tests|main_bench|episodes|leaderboard)/[\w./-]+\.(?:md|json|py|parquet))`")
+#: A file named in backticks: data and results by their repository path, modules also by their path in the package.
+_CODE_PATH = re.compile(r"`((?:docs|tools|tests|main_bench|episodes|leaderboard)/[\w./-]+\.(?:md|json|py|parquet)"
+                        r"|[\w-]+/[\w./-]+\.py)`")
+_PLACEHOLDER_FOLDERS = ("dir/", "path/")
+_TEST_NAME = re.compile(r"\btest_\w+")
+
+
+def _file_exists(named: str) -> bool:
+    return named.startswith(_PLACEHOLDER_FOLDERS) or any((root / named).exists()
+                                                         for root in (REPO, REPO / "main_bench", REPO / "tests"))
 
 
 def _broken_references(path: Path) -> list[str]:
@@ -80,9 +89,7 @@ def _broken_references(path: Path) -> list[str]:
             continue
         if not (path.parent / target.split("#", 1)[0]).exists():
             broken.append(f"link {target}")
-    broken += [f"path {p}" for p in _CODE_PATH.findall(text)
-               if not (REPO / p).exists() and not (REPO / "main_bench" / p).exists()]
-    return broken
+    return broken + [f"path {p}" for p in _CODE_PATH.findall(text) if not _file_exists(p)]
 
 
 @pytest.mark.parametrize("page", LINKED, ids=lambda p: p.name)
@@ -95,3 +102,13 @@ def test_every_benchmark_result_is_described():
     text = "\n".join(p.read_text(encoding="utf-8") for p in PAGES)
     unnamed = [f.name for f in sorted((DOCS / "bench").glob("*.json")) if f.name not in text]
     assert not unnamed, f"docs/bench files no page names (keep the latest run of each benchmark): {unnamed}"
+
+
+def test_every_test_a_page_names_exists():
+    tests = REPO / "tests"
+    defined = {p.stem for p in tests.rglob("test_*.py")}
+    for path in tests.rglob("*.py"):
+        defined |= set(re.findall(r"^\s*def (test_\w+)", path.read_text(encoding="utf-8"), flags=re.M))
+    named = {(page.name, name) for page in LINKED for name in _TEST_NAME.findall(page.read_text(encoding="utf-8"))}
+    missing = sorted(f"{page}: {name}" for page, name in named if name not in defined)
+    assert not missing, f"docs name tests that do not exist (renamed or removed?): {missing}"
