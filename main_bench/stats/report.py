@@ -9,6 +9,7 @@ from typing import Any
 from .. import __version__
 from ..errors import DatasetError
 from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from .compare import episode_length_vs_published
 from .data import agent_frame, episode_travel
 from .figures import StatsFigure, distance_histograms, ratio_distribution, scene_lengths, travel_vs_agents
 from .maps import density_figure, scene_map
@@ -67,9 +68,10 @@ def compute_stats(dataset: str | Path, out_dir: str | Path, settings: StatsSetti
     """Draw every dataset figure of `dataset` into `out_dir` (PNG + CSV each, plus stats.json), atomically.
 
     Figures: geodesic distance histograms by task and agent count; average episode length per scene (MAIN
-    Fig. 3a); distance to travel against the number of agents (Fig. 3b); geodesic/Euclidean ratio; object-goal
-    targets by room type where the scenes' sidecars know rooms; start and target density per scene (one row of
-    panels per floor) over its navigable cells when the scene's navmesh can be built.
+    Fig. 3a), alone and beside other data sets' published figures; distance to travel against the number of
+    agents (Fig. 3b); geodesic/Euclidean ratio; object-goal targets by room type where the scenes' sidecars know
+    rooms; start and target density per scene (one row of panels per floor) over its navigable cells when the
+    scene's navmesh can be built.
     """
     settings = settings or StatsSettings()
     dataset = Path(dataset)
@@ -79,6 +81,7 @@ def compute_stats(dataset: str | Path, out_dir: str | Path, settings: StatsSetti
     figures: list[StatsFigure] = [
         distance_histograms(frame, settings.histogram_bin_m),
         scene_lengths(frame),
+        episode_length_vs_published(frame),
         travel_vs_agents(frame, settings.seed),
         ratio_distribution(frame),
     ]

@@ -82,7 +82,7 @@ def test_cli_json_and_bad_input(dataset, tmp_path, cli):
     res = cli("stats", dataset, "--out", tmp_path / "s", "--no-maps", "--json")
     assert res.code == 0, res.err
     doc = json.loads(res.out)
-    assert doc["command"] == "stats" and len(doc["files"]) == 4 + len(SCENES)
+    assert doc["command"] == "stats" and len(doc["files"]) == 5 + len(SCENES)
     assert all((tmp_path / "s" / f"{f['name']}.csv").is_file() for f in doc["files"])
     res = cli("stats", tmp_path / "nope", "--out", tmp_path / "s2")
     assert res.code == 2 and "nope" in res.err and len(res.err.strip().splitlines()) == 1
