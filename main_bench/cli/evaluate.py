@@ -83,7 +83,8 @@ def evaluate(
     task: str = typer.Option("both", "--task", help="shared, individual or both."),
     agents: str | None = typer.Option(None, "--agents", help="Team sizes, e.g. 2,3 (default: all in the split)."),
     agent: str | None = typer.Option(None, "--agent", help="Policy spec: module:attr, file.py, directory, "
-                                     "or baseline:random / baseline:oracle."),
+                                     "or a baseline: baseline:random, baseline:oracle (built into the evaluator) or "
+                                     "baseline:comm (a torch agent policy, --mode comm)."),
     out: Path | None = typer.Option(None, "--out", help="Results directory (resumed if it holds this run)."),
     workers: int = typer.Option(1, "--workers", help="Worker processes (or Ray actors)."),
     renderer: str = typer.Option("auto", "--renderer", help="auto, gl or tiny."),
