@@ -205,12 +205,30 @@ def check_protocol(policy: Any, spec: PolicySpec | str, role: str = "team") -> A
 def load_policy(spec: PolicySpec, seed: int, role: str = "team") -> Any:
     """Load the policy `spec` names into the current process, seeding global generators with `seed`.
 
-    `role` `team` (a `TeamPolicy`, central mode) or `agent` (an `AgentPolicy`, silent and comm modes). Raises
+    `role` `team` (a `TeamPolicy`, central mode), `agent` (an `AgentPolicy`, silent and comm modes) or `any`
+    (either: what `check-agent` loads to learn the policy's kind, `policy_roles`). Raises
     `SubmissionError` (`ProtocolError` when the object lacks the role's `reset`/`act`) with the spec and the cause.
     """
-    policy = check_protocol(instantiate_policy(spec, seed), spec, role)
+    policy = instantiate_policy(spec, seed)
+    if role != "any":
+        check_protocol(policy, spec, role)
+    elif not policy_roles(policy):
+        check_protocol(policy, spec, "team")  # follows neither: the team policy's message says what is missing
     seed_everything(seed)
     return policy
+
+
+def policy_roles(policy: Any) -> tuple[str, ...]:
+    """The roles of `ROLES` whose protocol `policy` follows: `("team",)`, `("agent",)`, both (an `act(*args)`)
+    or none."""
+    roles = []
+    for role in ROLES:
+        try:
+            check_protocol(policy, "", role)
+        except ProtocolError:
+            continue
+        roles.append(role)
+    return tuple(roles)
 
 
 def _import(spec: PolicySpec) -> tuple[Any, Path | None]:
