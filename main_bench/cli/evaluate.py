@@ -12,6 +12,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ..numfmt import fraction, interval
 from .common import JsonOption, emit, parse_int_list, stderr_is_terminal
 
 app = typer.Typer(help="Evaluate a submitted team policy on an episode split.", rich_markup_mode=None, invoke_without_command=True)
@@ -62,9 +63,9 @@ def _render(payload: dict) -> str:
             s = team[m]
             if s["mean"] is None:
                 return f"{m} n/a"
-            text = f"{m} {s['mean']:.3f} [{s['ci_low']:.3f}, {s['ci_high']:.3f}]"
+            text = f"{m} {fraction(s['mean'])} {interval(s['ci_low'], s['ci_high'])}"
             if s.get("wilson_low") is not None:
-                text += f" W[{s['wilson_low']:.3f}, {s['wilson_high']:.3f}]"
+                text += f" W{interval(s['wilson_low'], s['wilson_high'])}"
             return text
 
         talk = track.get("communication") or {}

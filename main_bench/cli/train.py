@@ -11,6 +11,7 @@ from typing import Any
 
 import typer
 
+from ..numfmt import fraction
 from .common import JsonOption, emit
 
 ALGO_HELP = "multi-ppo | ippo | mappo | comm-s | comm-v | comm-rm | comm-rv"
@@ -101,8 +102,8 @@ def _render(d: dict[str, Any]) -> str:
     last = d["last"]
     return (f"{d['updates']} updates, {d['agent_steps']:,} agent-steps, {d['episodes']} episodes in "
             f"{d['wall_seconds']} s (resumed from update {d['resumed_from']})\n"
-            f"last: success {last.get('success', float('nan')):.3f}, team success "
-            f"{last.get('team_success', float('nan')):.3f}, SPL {last.get('spl', float('nan')):.3f}\n"
+            f"last: success {fraction(last.get('success'))}, team success "
+            f"{fraction(last.get('team_success'))}, SPL {fraction(last.get('spl'))}\n"
             f"submission: {d['submission']} (evaluate with --mode {d['mode']})")
 
 
