@@ -16,7 +16,7 @@ from .common import JsonOption, emit
 
 def register(app: typer.Typer) -> None:
     """Add `check-agent` to the `evaluate` group."""
-    app.command("check-agent")(check_agent)
+    app.command("check-agent", short_help="Check that a submission loads and plays by the protocol.")(check_agent)
 
 
 def check_agent(

@@ -139,7 +139,7 @@ def _render(d: dict[str, Any]) -> str:
 def register(app: typer.Typer) -> None:
     """Add the `demo` command to the root app."""
 
-    @app.command("demo")
+    @app.command("demo", short_help="Every stage end to end on built-in houses, in about a minute.")
     def demo(
         out: Path = typer.Option(Path("main-bench-demo"), "--out", help="Folder for every output of the demo."),
         episodes: Path = typer.Option(None, "--episodes", help="Score this data set (val split) "

@@ -37,7 +37,7 @@ def _tasks(task: str) -> tuple[str, ...]:
     raise InputError(f"--task must be shared, individual or both, got {task!r}")
 
 
-@app.command("generate")
+@app.command("generate", short_help="Sample multi-agent episodes into a Parquet data set.")
 def generate(
     scenes: list[str] = typer.Option(..., "--scenes", help="`builtin`, a folder of scene files, or scene files "
                                                            "(repeat --scenes for several)."),
@@ -138,7 +138,7 @@ def _default_navmesh_cache() -> Path | None:
     return Path(default_cache_dir()) / "navmesh"
 
 
-@app.command("validate")
+@app.command("validate", short_help="Check a data set (--recheck: distances recomputed too).")
 def validate(
     dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
     recheck: bool = typer.Option(False, "--recheck", help="Recompute geodesic distances from the navmesh."),
@@ -160,7 +160,7 @@ def _format(fmt: str) -> None:
         raise InputError(f"--format must be habitat, got {fmt!r}")
 
 
-@app.command("export")
+@app.command("export", short_help="Export a data set to Habitat PointNav-v1.")
 def export(
     dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
     out: Path = typer.Option(..., "--out", help="Folder for the exported files."),
@@ -176,7 +176,7 @@ def export(
          lambda d: "\n".join(["wrote"] + [f"  {f}" for f in d["files"]]))
 
 
-@app.command("import")
+@app.command("import", short_help="Import a Habitat PointNav-v1 export.")
 def import_(
     src: Path = typer.Argument(..., help="Folder of a Habitat export written by `episodes export`."),
     out: Path = typer.Option(..., "--out", help="Data set folder to write."),

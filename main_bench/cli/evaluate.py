@@ -15,7 +15,9 @@ from ..errors import InputError
 from ..numfmt import fraction, interval
 from .common import JsonOption, emit, parse_int_list, stderr_is_terminal
 
-app = typer.Typer(help="Evaluate a submitted team policy on an episode split.", rich_markup_mode=None, invoke_without_command=True)
+app = typer.Typer(help="Evaluate a submitted policy on an episode split (a team policy, or agent policies with --mode "
+                  "silent or comm); `main-bench evaluate check-agent SPEC` checks a submission first.",
+                  rich_markup_mode=None, invoke_without_command=True)
 
 
 class _Progress:

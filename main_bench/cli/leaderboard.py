@@ -17,7 +17,7 @@ def _group() -> None:
     """Build the leaderboard report from results directories."""
 
 
-@app.command("build")
+@app.command("build", short_help="Rank submissions per track by team SPL.")
 def build(
     results: list[Path] = typer.Argument(..., help="Results directories written by `main-bench evaluate`."),
     out: Path = typer.Option(..., "--out", help="Folder for index.html, README.md, leaderboard.json, plots/."),

@@ -21,10 +21,10 @@ def register(app: typer.Typer) -> None:
     """Add `train` (a group: `train run`, `train point-goals`) to the root app."""
     group = typer.Typer(help="Train the MAIN paper's baselines with PPO on a vectorised multi-agent sampler.",
                         no_args_is_help=True)
-    group.command("run")(run)
-    group.command("point-goals")(point_goals)
-    group.command("export")(export)
-    app.add_typer(group, name="train")
+    group.command("run", short_help="Train (or resume) one baseline; leaves a submission.")(run)
+    group.command("point-goals", short_help="Write a point-goal copy of a data set.")(point_goals)
+    group.command("export", short_help="Write the submission of a run's last checkpoint.")(export)
+    app.add_typer(group, name="train", short_help="Train the MAIN paper's PPO baselines; export submissions.")
 
 
 def run(
