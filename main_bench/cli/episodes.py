@@ -1,4 +1,4 @@
-"""`main-bench episodes`: generate, validate, export and import episode data sets."""
+"""`main-bench episodes`: generate, validate, list, export and import episode data sets."""
 
 from __future__ import annotations
 
@@ -21,12 +21,13 @@ from .common import (
     progress,
 )
 
-app = typer.Typer(help="Generate, validate, export and import episode data sets.", rich_markup_mode=None, no_args_is_help=True)
+app = typer.Typer(help="Generate, validate, list, export and import episode data sets.", rich_markup_mode=None,
+                  no_args_is_help=True)
 
 
 @app.callback()
 def _group() -> None:
-    """Generate, validate, export and import episode data sets."""
+    """Generate, validate, list, export and import episode data sets."""
 
 
 def _tasks(task: str) -> tuple[str, ...]:
@@ -153,6 +154,43 @@ def validate(
     emit("episodes validate", report.to_json(), as_json, lambda d: report.render())
     if not report.ok:
         raise typer.Exit(1)
+
+
+@app.command("list", short_help="Episode ids with scene, task, team size, targets, distances.")
+def list_(
+    dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
+    split: str | None = typer.Option(None, "--split", help="Only this split (train, val, test)."),
+    task: str | None = typer.Option(None, "--task", help="Only shared or individual targets."),
+    agents: int | None = typer.Option(None, "--agents", help="Only teams of this size."),
+    scene: str | None = typer.Option(None, "--scene", help="Only this scene id."),
+    limit: int = typer.Option(20, "--limit", help="Most episodes shown (0: every one)."),
+    as_json: bool = JsonOption,
+) -> None:
+    """List a data set's episodes: id, split, task, team size, scene, each agent's target and geodesic distance
+    (m), in (split, task, team size, id) order. The ids are what `main-bench visualize --episode` takes."""
+    from ..episodes.listing import EpisodeFilter, list_episodes
+
+    if limit < 0:
+        raise InputError(f"--limit must be 0 (every episode) or more, got {limit}")
+    listing = list_episodes(dataset, EpisodeFilter(split=split, task=task, agents=agents, scene=scene,
+                                                   limit=limit or None))
+    payload = {"dataset": str(listing.dataset), "matched": listing.matched,
+               "episodes": [e.to_dict() for e in listing.entries]}
+    emit("episodes list", payload, as_json, _render_list)
+
+
+def _render_list(d: dict) -> str:
+    head = ("episode id", "split", "task", "agents", "scene", "targets", "geodesic (m)")
+    rows = [(e["episode_id"], e["split"], e["task"], str(e["agents"]), e["scene_id"],
+             ", ".join(e["targets"][:1] if e["task"] == "shared" else e["targets"]), ", ".join(f"{v:.2f}" for v in e["geodesic_distances"]))
+            for e in d["episodes"]]
+    widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in [head, *rows]]
+    shown = len(rows)
+    more = "" if shown == d["matched"] else " (--limit 0 shows every one)"
+    lines.append(f"{shown} of {d['matched']} episodes shown{more}; picture one with "
+                 "`main-bench visualize RESULTS --episode ID --out episode.png`")
+    return "\n".join(lines)
 
 
 def _format(fmt: str) -> None:
