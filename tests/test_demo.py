@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shlex
 from pathlib import Path
 
 from main_bench.episodes.validate import validate_dataset
@@ -45,3 +46,10 @@ def test_demo_runs_every_stage_and_reports_its_outputs(cli, tmp_path):
     for part in ("stats", "results/random", "results/oracle", "leaderboard/index.html"):
         assert str(given / part) in r3.out
     assert "nothing generated" in r3.out
+    # The next steps it prints work as printed.
+    for command in doc["next"]:
+        args = shlex.split(command)
+        assert args[0] == "main-bench"
+        r = cli(*args[1:])
+        assert r.code == 0, (command, r.err)
+    assert (out / "episode.png").stat().st_size > 0

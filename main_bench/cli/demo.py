@@ -3,6 +3,7 @@ under a minute on 2 cores."""
 
 from __future__ import annotations
 
+import shlex
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -83,6 +84,9 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
     log("[6/6] leaderboard")
     board = build_leaderboard(list(results.values()), out / "leaderboard")
     lap("leaderboard")
+    from ..evaluation.results import load_results
+
+    picture = str(sorted(load_results(results["oracle"]).teams["episode_id"].astype(str))[0])
     return {
         "out": str(out),
         "episodes": ({"dataset": str(dataset), "produced": report.produced, "requested": report.requested,
@@ -92,6 +96,9 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
         "results": {k: str(v) for k, v in results.items()},
         "leaderboard": {"html": str(board.index_html), "markdown": str(board.readme_md),
                         "json": str(board.leaderboard_json)},
+        "next": [shlex.join(["main-bench", "episodes", "list", str(scored), "--split", "val"]),
+                 shlex.join(["main-bench", "visualize", str(results["oracle"]), "--episode", picture, "--out",
+                             str(out / "episode.png")])],
         "seconds": seconds,
         "total_seconds": round(sum(seconds.values()), 2),
     }
@@ -133,6 +140,8 @@ def _render(d: dict[str, Any]) -> str:
         *(f"  results     {path}  (baseline:{name})" for name, path in d["results"].items()),
         f"  leaderboard {d['leaderboard']['html']}  (open in a browser)",
         f"              {d['leaderboard']['markdown']}",
+        "next: list the episodes, and draw one the oracle played:",
+        *(f"  {command}" for command in d["next"]),
     ])
 
 
