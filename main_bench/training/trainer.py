@@ -277,7 +277,7 @@ def _progress_line(row: dict[str, float], total: int) -> str:
     return (f"update {int(row['update'])}/{total}  agent-steps {int(row['agent_steps']):,}  "
             f"{row['steps_per_second']:.0f} agent-steps/s  episodes {int(row['episodes'])}  "
             f"success {fraction(row['success'])}  team success {fraction(row['team_success'])}  "
-            f"reward {row['reward']:.2f}")
+            f"reward {'n/a' if np.isnan(row['reward']) else format(row['reward'], '.2f')}")
 
 
 def _tensorboard(run_dir: Path) -> Any:
