@@ -53,7 +53,6 @@ def check_agent(
     settings = CheckSettings(agents=agents, task=task, track=track, goal=goal, steps=steps, seed=seed,  # type: ignore[arg-type]
                              limits=limits, sandbox=SandboxSettings(enabled=not no_sandbox),
                              mode=mode or "central", message_floats=message_floats)
-    mode_for(spec, ("team", "agent"), mode)  # a bad --mode value is bad input before anything loads
     roles = policy_kind(policy_spec, settings)
     settings = dataclasses.replace(settings, mode=mode_for(spec, roles, mode))
     report = check_policy(policy_spec, settings)
