@@ -39,8 +39,8 @@ def check_agent(
     as_json: bool = JsonOption,
 ) -> None:
     """Check that a submission loads, follows the protocol of its kind (a team policy: central mode; an agent
-    policy: silent or comm mode, one process per agent), answers with valid actions (and messages) for exactly the acting agents, is deterministic
-    for a seed and stays within the time limit, in its own process (one per agent for agent policies)."""
+    policy: silent or comm mode, one process per agent), answers with valid actions (and messages) for exactly
+    the acting agents, is deterministic for a seed and stays within the time limit, in its own process."""
     from ..evaluation.check import CheckSettings, check_policy, mode_for, policy_kind
     from ..evaluation.process.isolation import Limits
     from ..evaluation.process.sandbox import SandboxSettings, require_sandbox

@@ -182,7 +182,8 @@ def list_(
 def _render_list(d: dict) -> str:
     head = ("episode id", "split", "task", "agents", "scene", "targets", "geodesic (m)")
     rows = [(e["episode_id"], e["split"], e["task"], str(e["agents"]), e["scene_id"],
-             ", ".join(e["targets"][:1] if e["task"] == "shared" else e["targets"]), ", ".join(f"{v:.2f}" for v in e["geodesic_distances"]))
+             ", ".join(e["targets"][:1] if e["task"] == "shared" else e["targets"]),
+             ", ".join(f"{v:.2f}" for v in e["geodesic_distances"]))
             for e in d["episodes"]]
     widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in [head, *rows]]
