@@ -68,8 +68,8 @@ def check_agent(
 def _render(d: dict[str, Any]) -> str:
     s = d["settings"]
     how = "" if d.get("mode_given", True) or d.get("kind") == "unknown" else f"{d['kind']}: "
-    lines = [f"check-agent {d['spec']}  ({how}{s['mode']} mode, {s['agents']} agents, {s['task']} target, {s['track']} track, "
-             f"{s['goal']} goals, {s['steps']} steps, seed {s['seed']})"]
+    lines = [f"check-agent {d['spec']}  ({how}{s['mode']} mode, {s['agents']} agents, {s['task']} target, "
+             f"{s['track']} track, {s['goal']} goals, {s['steps']} steps, seed {s['seed']})"]
     for c in d["checks"]:
         lines.append(f"  {c['status'].upper():<5} {c['name']:<14} {c['message']}")
     failed = [c["name"] for c in d["checks"] if c["status"] == "fail"]

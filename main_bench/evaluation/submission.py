@@ -119,8 +119,9 @@ def _baseline_spec(text: str) -> PolicySpec:
             "and runs only through `main-bench evaluate --agent`; the standalone baselines a check or a "
             f"submission can load are {', '.join(BASELINE_PREFIX + b for b in standalone_baselines()) or 'none'}"
         )
-    raise SubmissionError(f"policy spec {text!r}: no baseline {name!r}{did_you_mean(name, all_baselines(), BASELINE_PREFIX)}"
-                          f" (baselines: {', '.join(BASELINE_PREFIX + b for b in all_baselines())})")
+    names = all_baselines()
+    raise SubmissionError(f"policy spec {text!r}: no baseline {name!r}{did_you_mean(name, names, BASELINE_PREFIX)} "
+                          f"(baselines: {', '.join(BASELINE_PREFIX + b for b in names)})")
 
 
 def standalone_baselines() -> list[str]:
