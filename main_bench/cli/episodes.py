@@ -160,7 +160,7 @@ def validate(
 def list_(
     dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
     split: str | None = typer.Option(None, "--split", help="Only this split (train, val, test)."),
-    task: str | None = typer.Option(None, "--task", help="Only shared or individual targets."),
+    task: str = typer.Option("both", "--task", help="shared, individual or both."),
     agents: int | None = typer.Option(None, "--agents", help="Only teams of this size."),
     scene: str | None = typer.Option(None, "--scene", help="Only this scene id."),
     limit: int = typer.Option(20, "--limit", help="Most episodes shown (0: every one)."),
@@ -172,8 +172,8 @@ def list_(
 
     if limit < 0:
         raise InputError(f"--limit must be 0 (every episode) or more, got {limit}")
-    listing = list_episodes(dataset, EpisodeFilter(split=split, task=task, agents=agents, scene=scene,
-                                                   limit=limit or None))
+    listing = list_episodes(dataset, EpisodeFilter(split=split, task=None if task == "both" else task,
+                                                   agents=agents, scene=scene, limit=limit or None))
     payload = {"dataset": str(listing.dataset), "matched": listing.matched,
                "episodes": [e.to_dict() for e in listing.entries]}
     emit("episodes list", payload, as_json, _render_list)

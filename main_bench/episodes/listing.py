@@ -85,7 +85,7 @@ def list_episodes(dataset: str | Path, selection: EpisodeFilter = EpisodeFilter(
 def _check(manifest: Manifest, selection: EpisodeFilter) -> None:
     """Refuse a filter value the data set has none of, naming the values it has."""
     if selection.task is not None and selection.task not in TASKS:
-        raise InputError(f"--task must be {' or '.join(TASKS)}, got {selection.task!r}")
+        raise InputError(f"--task must be {', '.join(TASKS)} or both, got {selection.task!r}")
     if selection.limit is not None and selection.limit < 0:
         raise InputError(f"--limit must be 0 or more, got {selection.limit}")
     for what, value, have in (

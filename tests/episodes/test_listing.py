@@ -45,8 +45,8 @@ def test_a_value_the_data_set_lacks_names_what_it_has(selection, words):
 
 
 def test_a_bad_task_is_bad_input():
-    with pytest.raises(InputError, match="--task must be shared or individual"):
-        list_episodes(SAMPLE, EpisodeFilter(task="both"))
+    with pytest.raises(InputError, match="--task must be shared, individual or both"):
+        list_episodes(SAMPLE, EpisodeFilter(task="all"))
 
 
 def test_cli_text_and_json(cli):
@@ -56,7 +56,7 @@ def test_cli_text_and_json(cli):
     assert lines[0].split()[:2] == ["episode", "id"] and "geodesic" in lines[0]
     assert len(lines) == 5 and lines[-1].startswith("3 of ") and "--limit 0" in lines[-1]
     assert all(line.split()[1:4] == ["val", "individual", "2"] for line in lines[1:4])
-    r = cli("episodes", "list", SAMPLE, "--split", "val", "--agents", "2", "--limit", "0", "--json")
+    r = cli("episodes", "list", SAMPLE, "--split", "val", "--agents", "2", "--task", "both", "--limit", "0", "--json")
     doc = json.loads(r.out)
     assert doc["schema_version"] == 1 and doc["command"] == "episodes list"
     assert len(doc["episodes"]) == doc["matched"] == len(load_table(SAMPLE, "val", None, 2))
