@@ -17,6 +17,35 @@ def test_help_lists_every_stage(cli):
         assert group in r.out
 
 
+def _commands(command, path=("main-bench",)):
+    """(path, click command) of every command and group under `command`."""
+    for name, sub in getattr(command, "commands", {}).items():
+        yield (*path, name), sub
+        yield from _commands(sub, (*path, name))
+
+
+def test_every_help_line_is_whole(cli, monkeypatch):
+    """Each command and group has its own one-line help, and `--help` of the root and of every group shows it in
+    full (no "..." cut) in an 80-column terminal."""
+    import typer.main
+
+    from main_bench.cli.app import app
+
+    monkeypatch.setenv("COLUMNS", "80")
+    commands = list(_commands(typer.main.get_command(app)))
+    assert len(commands) > 25
+    for path, command in commands:
+        assert command.short_help and len(command.short_help) <= 64 and "\n" not in command.short_help, path
+    groups = [("main-bench",)] + [path for path, c in commands if hasattr(c, "commands")]
+    for group in groups:
+        r = cli(*group[1:], "--help")
+        assert r.code == 0, (group, r.err)
+        assert not [line for line in r.out.splitlines() if "..." in line and not line.startswith("Usage:")], r.out
+        listed = {path[-1]: c.short_help for path, c in commands if path[:-1] == group}
+        for name, short in listed.items():
+            assert any(line.split() == [name, *short.split()] for line in r.out.splitlines()), (group, name, r.out)
+
+
 def test_version(cli):
     r = cli("--version")
     assert r.code == 0

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import json
-
-from mb_testing import REPO
+import shlex
+from pathlib import Path
 
 from main_bench.episodes.validate import validate_dataset
 
@@ -17,10 +17,11 @@ def test_demo_runs_every_stage_and_reports_its_outputs(cli, tmp_path):
     assert doc["schema_version"] == 1 and doc["command"] == "demo"
     assert doc["episodes"]["produced"] > 0 and doc["episodes"]["validated"]
     assert validate_dataset(doc["episodes"]["dataset"]).ok
-    # In a source checkout the baselines are scored on the committed sample data set.
-    assert doc["scored"] == str(REPO / "episodes" / "sample")
+    # The baselines are scored on the data set the demo generated, and the text says where everything is.
+    assert doc["scored"] == doc["episodes"]["dataset"] == str(out / "episodes")
     summary = json.loads((out / "results" / "oracle" / "summary.json").read_text())
-    assert summary["dataset"]["path"] == str(REPO / "episodes" / "sample")
+    assert Path(summary["dataset"]["path"]).resolve() == (out / "episodes").resolve()
+    assert sum(t["episodes"] for t in summary["tracks"].values()) > 0
     board = json.loads((out / "leaderboard" / "leaderboard.json").read_text())
     assert board  # EvalAI-shaped results of both baselines
     html = (out / "leaderboard" / "index.html").read_text()
@@ -36,3 +37,19 @@ def test_demo_runs_every_stage_and_reports_its_outputs(cli, tmp_path):
     r2 = cli("demo", "--out", out, "--houses", "1", "--per-scene", "2", "--limit", "1", "--workers", "1", "--json")
     assert r2.code == 0, r2.err
     assert (out / "episodes" / "manifest.json").read_bytes() == manifest
+
+    # Given a data set, the demo generates nothing and scores that one; its text names every output folder.
+    given = tmp_path / "given"
+    r3 = cli("demo", "--out", given, "--episodes", out / "episodes", "--limit", "1", "--workers", "1")
+    assert r3.code == 0, r3.err
+    assert not (given / "episodes").exists() and "[2/6]" not in r3.err
+    for part in ("stats", "results/random", "results/oracle", "leaderboard/index.html"):
+        assert str(given / part) in r3.out
+    assert "nothing generated" in r3.out
+    # The next steps it prints work as printed.
+    for command in doc["next"]:
+        args = shlex.split(command)
+        assert args[0] == "main-bench"
+        r = cli(*args[1:])
+        assert r.code == 0, (command, r.err)
+    assert (out / "episode.png").stat().st_size > 0

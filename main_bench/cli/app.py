@@ -43,11 +43,14 @@ def _root(
 def _register() -> None:
     from . import bench, demo, episodes, evaluate, leaderboard, navmesh, scenes, stats, train, visualize
 
-    app.add_typer(scenes.app, name="scenes")
-    app.add_typer(navmesh.app, name="navmesh")
-    app.add_typer(episodes.app, name="episodes")
-    app.add_typer(evaluate.app, name="evaluate")
-    app.add_typer(leaderboard.app, name="leaderboard")
+    app.add_typer(scenes.app, name="scenes", short_help="Inspect scenes; generate and preview built-in houses.")
+    app.add_typer(navmesh.app, name="navmesh", short_help="Build navmeshes and query geodesic distances.")
+    app.add_typer(episodes.app, name="episodes",
+                  short_help="Generate, validate, list, export and import episode data sets.")
+    app.add_typer(evaluate.app, name="evaluate",
+                  short_help="Evaluate a policy on an episode split; check a submission.")
+    app.add_typer(leaderboard.app, name="leaderboard",
+                  short_help="Build the leaderboard report from results directories.")
     stats.register(app)
     visualize.register(app)
     demo.register(app)

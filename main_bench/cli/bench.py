@@ -16,7 +16,7 @@ AREAS = ("navmesh", "episodes", "sim", "sandbox", "e2e", "large", "modes", "trai
 def register(app: typer.Typer) -> None:
     """Add the `bench` command to the root app."""
 
-    @app.command("bench")
+    @app.command("bench", short_help="Measure this machine's build, generation and simulation speed.")
     def bench(
         areas: list[str] = typer.Argument(None, help=f"Areas to benchmark (default: all of {', '.join(AREAS)})."),
         quick: bool = typer.Option(False, "--quick", help="Small sizes and few repeats: a smoke run."),

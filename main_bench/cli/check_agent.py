@@ -6,6 +6,7 @@ parsed or a bad option.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import typer
@@ -15,7 +16,7 @@ from .common import JsonOption, emit
 
 def register(app: typer.Typer) -> None:
     """Add `check-agent` to the `evaluate` group."""
-    app.command("check-agent")(check_agent)
+    app.command("check-agent", short_help="Check that a submission loads and plays by the protocol.")(check_agent)
 
 
 def check_agent(
@@ -31,15 +32,16 @@ def check_agent(
     memory_mb: int = typer.Option(4096, "--memory-mb", help="Address-space limit of the policy process (MB)."),
     no_sandbox: bool = typer.Option(False, "--no-sandbox", help="Run the policy without the bubblewrap sandbox "
                                     "(the isolation check then fails)."),
-    mode: str = typer.Option("central", "--mode", help="central (a team policy) or silent / comm (an agent "
-                             "policy: one process per agent)."),
+    mode: str | None = typer.Option(None, "--mode", help="central (a team policy) or silent / comm (an agent "
+                                    "policy: one process per agent); default: the policy's own kind (central for "
+                                    "a team policy, comm for an agent policy)."),
     message_floats: int = typer.Option(32, "--message-floats", help="comm mode: largest message (float32 values)."),
     as_json: bool = JsonOption,
 ) -> None:
-    """Check that a submission loads, follows the team policy protocol (or, with --mode silent/comm, the agent
-    policy protocol), answers with valid actions (and messages) for exactly the acting agents, is deterministic
-    for a seed and stays within the time limit, in its own process (one per agent for agent policies)."""
-    from ..evaluation.check import CheckSettings, check_policy
+    """Check that a submission loads, follows the protocol of its kind (a team policy: central mode; an agent
+    policy: silent or comm mode, one process per agent), answers with valid actions (and messages) for exactly
+    the acting agents, is deterministic for a seed and stays within the time limit, in its own process."""
+    from ..evaluation.check import CheckSettings, check_policy, mode_for, policy_kind
     from ..evaluation.process.isolation import Limits
     from ..evaluation.process.sandbox import SandboxSettings, require_sandbox
     from ..evaluation.submission import parse_spec
@@ -49,11 +51,15 @@ def check_agent(
         require_sandbox()
     limits = Limits(step_seconds=step_seconds, memory_mb=memory_mb)
     settings = CheckSettings(agents=agents, task=task, track=track, goal=goal, steps=steps, seed=seed,  # type: ignore[arg-type]
-                             limits=limits, sandbox=SandboxSettings(enabled=not no_sandbox), mode=mode,
-                             message_floats=message_floats)
+                             limits=limits, sandbox=SandboxSettings(enabled=not no_sandbox),
+                             mode=mode or "central", message_floats=message_floats)
+    roles = policy_kind(policy_spec, settings)
+    settings = dataclasses.replace(settings, mode=mode_for(spec, roles, mode))
     report = check_policy(policy_spec, settings)
     payload = report.to_dict()
     payload["spec"] = spec
+    payload["kind"] = "team policy" if "team" in roles else "agent policy" if roles else "unknown"
+    payload["mode_given"] = mode is not None
     emit("evaluate check-agent", payload, as_json, _render)
     if not report.passed:
         raise typer.Exit(1)
@@ -61,8 +67,9 @@ def check_agent(
 
 def _render(d: dict[str, Any]) -> str:
     s = d["settings"]
-    lines = [f"check-agent {d['spec']}  ({s['mode']} mode, {s['agents']} agents, {s['task']} target, {s['track']} track, "
-             f"{s['goal']} goals, {s['steps']} steps, seed {s['seed']})"]
+    how = "" if d.get("mode_given", True) or d.get("kind") == "unknown" else f"{d['kind']}: "
+    lines = [f"check-agent {d['spec']}  ({how}{s['mode']} mode, {s['agents']} agents, {s['task']} target, "
+             f"{s['track']} track, {s['goal']} goals, {s['steps']} steps, seed {s['seed']})"]
     for c in d["checks"]:
         lines.append(f"  {c['status'].upper():<5} {c['name']:<14} {c['message']}")
     failed = [c["name"] for c in d["checks"] if c["status"] == "fail"]

@@ -1,7 +1,9 @@
-"""`main-bench demo`: every stage end to end on built-in procedural houses, in a few minutes on 2 cores."""
+"""`main-bench demo`: every stage end to end on built-in procedural houses (episodes generated, then scored), in
+under a minute on 2 cores."""
 
 from __future__ import annotations
 
+import shlex
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -17,19 +19,11 @@ from .common import JsonOption, emit
 DEMO_BASELINES = ("random", "oracle")
 
 
-def committed_sample() -> Path | None:
-    """The small data set committed under `episodes/sample/` of a source checkout, or None (a wheel install)."""
-    import main_bench
-
-    sample = Path(main_bench.__file__).resolve().parents[1] / "episodes" / "sample"
-    return sample if (sample / "manifest.json").is_file() else None
-
-
 @dataclass(frozen=True)
 class DemoSettings:
     """What the demo runs: `houses` built-in val houses to generate episodes on, `per_scene` episodes per
     (scene, task, team size); statistics, evaluation (`limit` episodes per track and baseline) and the
-    leaderboard on `episodes` (None: the committed sample, else the data set the demo generates)."""
+    leaderboard on the data set it generates, or on `episodes` when given (then nothing is generated)."""
 
     out: Path
     episodes: Path | None = None
@@ -43,19 +37,15 @@ class DemoSettings:
 
 
 def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: None) -> dict[str, Any]:
-    """Run scenes -> navmesh -> episodes -> validate -> stats -> evaluate baselines -> leaderboard.
+    """Run scenes -> navmesh -> episodes -> validate -> stats -> evaluate baselines -> leaderboard (the first three
+    skipped when `settings.episodes` names a data set to score).
 
     Returns the output paths and the seconds each stage took. Re-running reuses what is already there
     (built houses, cached navmeshes, finished shards and result chunks).
     """
-    from ..episodes.generate import generate_dataset
-    from ..episodes.settings import GenerationSettings
-    from ..episodes.sources import resolve_sources
-    from ..episodes.validate import validate_dataset
     from ..evaluation.runner import evaluate
     from ..evaluation.settings import EvalSettings, SubmissionMeta
     from ..leaderboard.build import build_leaderboard
-    from ..navmesh import NavMeshSettings
     from ..stats.report import StatsSettings, compute_stats
 
     out = settings.out
@@ -70,21 +60,13 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
         log(f"  {stage}: {seconds[stage]:.1f} s")
         clock = now
 
-    log(f"[1/6] built-in houses and their navmeshes -> {cache}")
-    sources = resolve_sources(["builtin"], only_splits=["val"], cache_dir=cache)[: settings.houses]
-    lap("scenes")
-    dataset = out / "episodes"
-    log(f"[2/6] episodes ({len(sources)} houses, shared and individual targets, {settings.agents} agents)")
-    gen = GenerationSettings(agents=settings.agents, per_scene=settings.per_scene, seed=settings.seed)
-    report = generate_dataset(gen, sources, dataset, NavMeshSettings(), workers=settings.workers,
-                              cache_dir=cache / "navmesh")
-    lap("episodes")
-    log("[3/6] validating the episodes, distances recomputed from the navmesh")
-    check = validate_dataset(dataset, recheck=True, cache_dir=cache)
-    if not check.ok:
-        raise GenerationError(f"{dataset}: the generated data set failed validation:\n{check.render(limit=5)}")
-    lap("validate")
-    scored = settings.episodes or committed_sample() or dataset
+    generated = settings.episodes is None
+    if generated:
+        dataset, report, validated = _generate(settings, cache, log, lap)
+        scored = dataset
+    else:
+        scored = Path(settings.episodes)  # type: ignore[arg-type]
+        log(f"[1-3/6] no episodes generated: scoring the given data set {scored}")
     log(f"[4/6] dataset statistics of {scored}")
     stats = compute_stats(scored, out / "stats", StatsSettings(cache_dir=cache))
     lap("stats")
@@ -102,40 +84,75 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
     log("[6/6] leaderboard")
     board = build_leaderboard(list(results.values()), out / "leaderboard")
     lap("leaderboard")
+    from ..evaluation.results import load_results
+
+    picture = str(sorted(load_results(results["oracle"]).teams["episode_id"].astype(str))[0])
     return {
         "out": str(out),
-        "episodes": {"dataset": str(dataset), "produced": report.produced, "requested": report.requested,
-                     "validated": check.ok},
+        "episodes": ({"dataset": str(dataset), "produced": report.produced, "requested": report.requested,
+                      "validated": validated} if generated else None),
         "scored": str(scored),
         "stats": str(stats.out_dir),
         "results": {k: str(v) for k, v in results.items()},
         "leaderboard": {"html": str(board.index_html), "markdown": str(board.readme_md),
                         "json": str(board.leaderboard_json)},
+        "next": [shlex.join(["main-bench", "episodes", "list", str(scored), "--split", "val"]),
+                 shlex.join(["main-bench", "visualize", str(results["oracle"]), "--episode", picture, "--out",
+                             str(out / "episode.png")])],
         "seconds": seconds,
         "total_seconds": round(sum(seconds.values()), 2),
     }
 
 
+def _generate(settings: DemoSettings, cache: Path, log: Callable[[str], None],
+              lap: Callable[[str], None]) -> tuple[Path, Any, bool]:
+    """Stages 1 to 3: built-in houses and navmeshes, episodes on them, validation with distances recomputed.
+    Returns (data set, generation report, validated)."""
+    from ..episodes.generate import generate_dataset
+    from ..episodes.settings import GenerationSettings
+    from ..episodes.sources import resolve_sources
+    from ..episodes.validate import validate_dataset
+    from ..navmesh import NavMeshSettings
+
+    log(f"[1/6] built-in houses and their navmeshes -> {cache}")
+    sources = resolve_sources(["builtin"], only_splits=["val"], cache_dir=cache)[: settings.houses]
+    lap("scenes")
+    dataset = settings.out / "episodes"
+    log(f"[2/6] episodes ({len(sources)} houses, shared and individual targets, {settings.agents} agents) -> {dataset}")
+    gen = GenerationSettings(agents=settings.agents, per_scene=settings.per_scene, seed=settings.seed)
+    report = generate_dataset(gen, sources, dataset, NavMeshSettings(), workers=settings.workers,
+                              cache_dir=cache / "navmesh")
+    lap("episodes")
+    log("[3/6] validating the episodes, distances recomputed from the navmesh")
+    check = validate_dataset(dataset, recheck=True, cache_dir=cache)
+    if not check.ok:
+        raise GenerationError(f"{dataset}: the generated data set failed validation:\n{check.render(limit=5)}")
+    lap("validate")
+    return dataset, report, check.ok
+
+
 def _render(d: dict[str, Any]) -> str:
     return "\n".join([
         f"demo finished in {d['total_seconds']:.0f} s; outputs under {d['out']}",
-        f"  episodes    {d['episodes']['dataset']}  ({d['episodes']['produced']} episodes, validated)",
-        f"  scored on   {d['scored']}",
+        (f"  episodes    {d['episodes']['dataset']}  ({d['episodes']['produced']} episodes generated, validated, "
+         "scored)" if d["episodes"] else f"  scored on   {d['scored']}  (given, nothing generated)"),
         f"  statistics  {d['stats']}",
         *(f"  results     {path}  (baseline:{name})" for name, path in d["results"].items()),
         f"  leaderboard {d['leaderboard']['html']}  (open in a browser)",
         f"              {d['leaderboard']['markdown']}",
+        "next: list the episodes, and draw one the oracle played:",
+        *(f"  {command}" for command in d["next"]),
     ])
 
 
 def register(app: typer.Typer) -> None:
     """Add the `demo` command to the root app."""
 
-    @app.command("demo")
+    @app.command("demo", short_help="Every stage end to end on built-in houses, in about a minute.")
     def demo(
         out: Path = typer.Option(Path("main-bench-demo"), "--out", help="Folder for every output of the demo."),
-        episodes: Path = typer.Option(None, "--episodes", help="Data set to score the baselines on "
-                                      "(default: the committed episodes/sample, else the one the demo makes)."),
+        episodes: Path = typer.Option(None, "--episodes", help="Score this data set (val split) "
+                                      "instead of generating one on built-in houses."),
         houses: int = typer.Option(2, "--houses", min=1, help="Built-in val houses to use."),
         per_scene: int = typer.Option(6, "--per-scene", min=1, help="Episodes per scene, task and team size."),
         limit: int = typer.Option(8, "--limit", min=1, help="Episodes evaluated per track and baseline."),

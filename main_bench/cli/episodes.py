@@ -1,4 +1,4 @@
-"""`main-bench episodes`: generate, validate, export and import episode data sets."""
+"""`main-bench episodes`: generate, validate, list, export and import episode data sets."""
 
 from __future__ import annotations
 
@@ -21,12 +21,13 @@ from .common import (
     progress,
 )
 
-app = typer.Typer(help="Generate, validate, export and import episode data sets.", rich_markup_mode=None, no_args_is_help=True)
+app = typer.Typer(help="Generate, validate, list, export and import episode data sets.", rich_markup_mode=None,
+                  no_args_is_help=True)
 
 
 @app.callback()
 def _group() -> None:
-    """Generate, validate, export and import episode data sets."""
+    """Generate, validate, list, export and import episode data sets."""
 
 
 def _tasks(task: str) -> tuple[str, ...]:
@@ -37,7 +38,7 @@ def _tasks(task: str) -> tuple[str, ...]:
     raise InputError(f"--task must be shared, individual or both, got {task!r}")
 
 
-@app.command("generate")
+@app.command("generate", short_help="Sample multi-agent episodes into a Parquet data set.")
 def generate(
     scenes: list[str] = typer.Option(..., "--scenes", help="`builtin`, a folder of scene files, or scene files "
                                                            "(repeat --scenes for several)."),
@@ -138,7 +139,7 @@ def _default_navmesh_cache() -> Path | None:
     return Path(default_cache_dir()) / "navmesh"
 
 
-@app.command("validate")
+@app.command("validate", short_help="Check a data set (--recheck: distances recomputed too).")
 def validate(
     dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
     recheck: bool = typer.Option(False, "--recheck", help="Recompute geodesic distances from the navmesh."),
@@ -155,12 +156,50 @@ def validate(
         raise typer.Exit(1)
 
 
+@app.command("list", short_help="Episode ids with scene, task, team size, targets, distances.")
+def list_(
+    dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
+    split: str | None = typer.Option(None, "--split", help="Only this split (train, val, test)."),
+    task: str = typer.Option("both", "--task", help="shared, individual or both."),
+    agents: int | None = typer.Option(None, "--agents", help="Only teams of this size."),
+    scene: str | None = typer.Option(None, "--scene", help="Only this scene id."),
+    limit: int = typer.Option(20, "--limit", help="Most episodes shown (0: every one)."),
+    as_json: bool = JsonOption,
+) -> None:
+    """List a data set's episodes: id, split, task, team size, scene, each agent's target and geodesic distance
+    (m), in (split, task, team size, id) order. The ids are what `main-bench visualize --episode` takes."""
+    from ..episodes.listing import EpisodeFilter, list_episodes
+
+    if limit < 0:
+        raise InputError(f"--limit must be 0 (every episode) or more, got {limit}")
+    listing = list_episodes(dataset, EpisodeFilter(split=split, task=None if task == "both" else task,
+                                                   agents=agents, scene=scene, limit=limit or None))
+    payload = {"dataset": str(listing.dataset), "matched": listing.matched,
+               "episodes": [e.to_dict() for e in listing.entries]}
+    emit("episodes list", payload, as_json, _render_list)
+
+
+def _render_list(d: dict) -> str:
+    head = ("episode id", "split", "task", "agents", "scene", "targets", "geodesic (m)")
+    rows = [(e["episode_id"], e["split"], e["task"], str(e["agents"]), e["scene_id"],
+             ", ".join(e["targets"][:1] if e["task"] == "shared" else e["targets"]),
+             ", ".join(f"{v:.2f}" for v in e["geodesic_distances"]))
+            for e in d["episodes"]]
+    widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in [head, *rows]]
+    shown = len(rows)
+    more = "" if shown == d["matched"] else " (--limit 0 shows every one)"
+    lines.append(f"{shown} of {d['matched']} episodes shown{more}; picture one with "
+                 "`main-bench visualize RESULTS --episode ID --out episode.png`")
+    return "\n".join(lines)
+
+
 def _format(fmt: str) -> None:
     if fmt != "habitat":
         raise InputError(f"--format must be habitat, got {fmt!r}")
 
 
-@app.command("export")
+@app.command("export", short_help="Export a data set to Habitat PointNav-v1.")
 def export(
     dataset: Path = typer.Argument(..., help="Data set folder (with manifest.json)."),
     out: Path = typer.Option(..., "--out", help="Folder for the exported files."),
@@ -176,7 +215,7 @@ def export(
          lambda d: "\n".join(["wrote"] + [f"  {f}" for f in d["files"]]))
 
 
-@app.command("import")
+@app.command("import", short_help="Import a Habitat PointNav-v1 export.")
 def import_(
     src: Path = typer.Argument(..., help="Folder of a Habitat export written by `episodes export`."),
     out: Path = typer.Option(..., "--out", help="Data set folder to write."),

@@ -12,9 +12,12 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ..numfmt import fraction, interval
 from .common import JsonOption, emit, parse_int_list, stderr_is_terminal
 
-app = typer.Typer(help="Evaluate a submitted team policy on an episode split.", rich_markup_mode=None, invoke_without_command=True)
+app = typer.Typer(help="Evaluate a submitted policy on an episode split (a team policy, or agent policies with --mode "
+                  "silent or comm); `main-bench evaluate check-agent SPEC` checks a submission first.",
+                  rich_markup_mode=None, invoke_without_command=True)
 
 
 class _Progress:
@@ -62,9 +65,9 @@ def _render(payload: dict) -> str:
             s = team[m]
             if s["mean"] is None:
                 return f"{m} n/a"
-            text = f"{m} {s['mean']:.3f} [{s['ci_low']:.3f}, {s['ci_high']:.3f}]"
+            text = f"{m} {fraction(s['mean'])} {interval(s['ci_low'], s['ci_high'])}"
             if s.get("wilson_low") is not None:
-                text += f" W[{s['wilson_low']:.3f}, {s['wilson_high']:.3f}]"
+                text += f" W{interval(s['wilson_low'], s['wilson_high'])}"
             return text
 
         talk = track.get("communication") or {}
@@ -83,7 +86,8 @@ def evaluate(
     task: str = typer.Option("both", "--task", help="shared, individual or both."),
     agents: str | None = typer.Option(None, "--agents", help="Team sizes, e.g. 2,3 (default: all in the split)."),
     agent: str | None = typer.Option(None, "--agent", help="Policy spec: module:attr, file.py, directory, "
-                                     "or baseline:random / baseline:oracle."),
+                                     "or a baseline: baseline:random, baseline:oracle (built into the evaluator) or "
+                                     "baseline:comm (a torch agent policy, --mode comm)."),
     out: Path | None = typer.Option(None, "--out", help="Results directory (resumed if it holds this run)."),
     workers: int = typer.Option(1, "--workers", help="Worker processes (or Ray actors)."),
     renderer: str = typer.Option("auto", "--renderer", help="auto, gl or tiny."),

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import typer
 
+from ..numfmt import fraction
 from .common import JsonOption, emit
 
 app = typer.Typer(help="Build the leaderboard report from results directories.", rich_markup_mode=None, no_args_is_help=True)
@@ -16,7 +17,7 @@ def _group() -> None:
     """Build the leaderboard report from results directories."""
 
 
-@app.command("build")
+@app.command("build", short_help="Rank submissions per track by team SPL.")
 def build(
     results: list[Path] = typer.Argument(..., help="Results directories written by `main-bench evaluate`."),
     out: Path = typer.Option(..., "--out", help="Folder for index.html, README.md, leaderboard.json, plots/."),
@@ -60,8 +61,8 @@ def _render(d: dict) -> str:
         for key, rows in s["tracks"].items():
             lines.append(f"  {key}")
             for r in rows:
-                lines.append(f"    {r['rank']:>2}. {r['name']:<30} SPL {100 * r['spl']:5.1f}  "
-                             f"success {100 * r['success']:5.1f}  ({r['episodes']} episodes)")
+                lines.append(f"    {r['rank']:>2}. {r['name']:<30} SPL {fraction(r['spl'])}  "
+                             f"success {fraction(r['success'])}  ({r['episodes']} episodes)")
     lines.append(f"wrote {d['index_html']}")
     lines.append(f"      {d['readme_md']}")
     lines.append(f"      {d['leaderboard_json']}")

@@ -30,7 +30,7 @@ FromOption = typer.Option(..., "--from", help="Start point x,y,z (m, +Z up, feet
 ToOption = typer.Option(..., "--to", help="Goal point x,y,z (m, +Z up, feet height).")
 
 
-@app.command("build")
+@app.command("build", short_help="Build a scene's walkable surface for an agent.")
 def build(
     scene: str = typer.Argument(
         ..., help="Scene file (.glb, .gltf, .obj, .ply) or a built-in house id (house_0007)."
@@ -104,7 +104,7 @@ def _load_scene(scene: str, up: str, scale: float | None) -> Any:
     return load_scene_geometry(path, up=up, scale=scale)  # type: ignore[arg-type]
 
 
-@app.command("info")
+@app.command("info", short_help="Islands, floors, navigable area and build settings.")
 def info(file: Path = FileArg, as_json: bool = JsonOption) -> None:
     """Islands (area, floor, bounds), floors, navigable area and the build settings."""
     from ..navmesh import NavMesh
@@ -144,7 +144,7 @@ def _query(file: Path, start: str, goal: str) -> tuple[Any, Any, Any]:
     return NavMesh.load(file), a, b
 
 
-@app.command("distance")
+@app.command("distance", short_help="Geodesic distance between two points.")
 def distance(
     file: Path = FileArg, start: str = FromOption, goal: str = ToOption, as_json: bool = JsonOption
 ) -> None:
@@ -166,7 +166,7 @@ def distance(
     )
 
 
-@app.command("path")
+@app.command("path", short_help="Shortest path between two points.")
 def path(
     file: Path = FileArg, start: str = FromOption, goal: str = ToOption, as_json: bool = JsonOption
 ) -> None:
@@ -193,7 +193,7 @@ def _render_path(p: dict[str, Any]) -> str:
     return f"{p['length']:.3f} m, {len(p['points'])} points\n{pts}"
 
 
-@app.command("map")
+@app.command("map", short_help="Top-down picture of a navmesh, optionally with a path.")
 def draw_map(
     file: Path = FileArg,
     out: Path = typer.Option(..., "--out", "-o", help="PNG file to write."),
@@ -225,7 +225,7 @@ def draw_map(
     emit("navmesh map", payload, as_json, lambda d: f"wrote {d['out']}: {d['floors']} floor panel(s)")
 
 
-@app.command("export")
+@app.command("export", short_help="Write the walkable surface as a mesh.")
 def export(
     file: Path = FileArg,
     out: Path = typer.Option(..., "--out", "-o", help="Mesh file to write."),

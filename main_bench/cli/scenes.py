@@ -13,7 +13,7 @@ app = typer.Typer(help="Inspect scenes; generate and preview built-in procedural
 
 
 
-@app.command("info")
+@app.command("info", short_help="Triangles, bounds, up axis, units, hash and objects of a scene.")
 def info(
     scene: Path = typer.Argument(..., help="Scene file (.glb, .gltf, .obj, .ply)."),
     up: str = UpOption,
@@ -43,7 +43,7 @@ def _render_info(d: dict) -> str:
     return "\n".join(lines)
 
 
-@app.command("generate")
+@app.command("generate", short_help="Write built-in procedural houses (.glb and .objects.json).")
 def generate(
     out: Path = typer.Argument(..., help="Folder to write the houses into (created if missing)."),
     count: int = typer.Option(1, "--count", "-n", min=1, max=100000, help="Number of houses."),
@@ -88,7 +88,7 @@ def _render_generate(d: dict) -> str:
     return "\n".join(lines)
 
 
-@app.command("preview")
+@app.command("preview", short_help="Top-down picture of a scene: rooms and objects.")
 def preview(
     scene: Path = typer.Argument(..., help="Scene file (.glb, .gltf, .obj, .ply)."),
     out: Path = typer.Option(..., "--out", "-o", help="PNG file to write."),
@@ -111,7 +111,7 @@ def preview(
          lambda d: f"wrote {d['out']}: {len(d['floors'])} floor(s), {d['rooms']} rooms, {d['objects']} objects")
 
 
-@app.command("import")
+@app.command("import", short_help="Read a dataset's object annotations into sidecar files.")
 def import_(
     src: Path = typer.Argument(..., help="Downloaded dataset folder (Habitat layout) or one annotation file."),
     fmt: str = typer.Option(..., "--format", "-f", help="mp3d, hm3d, replicacad or hssd."),

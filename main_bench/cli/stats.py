@@ -11,7 +11,7 @@ from .common import JsonOption, emit
 
 def register(app: typer.Typer) -> None:
     """Add the `stats` command to the root app."""
-    app.command("stats")(stats)
+    app.command("stats", short_help="Data set statistics and the MAIN paper's figures.")(stats)
 
 
 def stats(

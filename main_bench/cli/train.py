@@ -11,6 +11,7 @@ from typing import Any
 
 import typer
 
+from ..numfmt import fraction
 from .common import JsonOption, emit
 
 ALGO_HELP = "multi-ppo | ippo | mappo | comm-s | comm-v | comm-rm | comm-rv"
@@ -20,10 +21,10 @@ def register(app: typer.Typer) -> None:
     """Add `train` (a group: `train run`, `train point-goals`) to the root app."""
     group = typer.Typer(help="Train the MAIN paper's baselines with PPO on a vectorised multi-agent sampler.",
                         no_args_is_help=True)
-    group.command("run")(run)
-    group.command("point-goals")(point_goals)
-    group.command("export")(export)
-    app.add_typer(group, name="train")
+    group.command("run", short_help="Train (or resume) one baseline; leaves a submission.")(run)
+    group.command("point-goals", short_help="Write a point-goal copy of a data set.")(point_goals)
+    group.command("export", short_help="Write the submission of a run's last checkpoint.")(export)
+    app.add_typer(group, name="train", short_help="Train the MAIN paper's PPO baselines; export submissions.")
 
 
 def run(
@@ -93,17 +94,44 @@ def run(
     payload = {"updates": summary.updates, "agent_steps": summary.agent_steps, "episodes": summary.episodes,
                "wall_seconds": round(summary.wall_seconds, 1), "resumed_from": summary.resumed_from,
                "last": summary.last, "timing_seconds": summary.timing, "run_dir": summary.run_dir,
-               "submission": summary.submission, "mode": settings.mode, "command": command}
+               "submission": summary.submission, "mode": settings.mode, "track": settings.track,
+               "goal": settings.goal, "command": command,
+               "evaluate_command": evaluate_command(summary.submission, str(episodes), settings.mode,
+                                                    settings.track, str(Path(summary.run_dir) / "eval"),
+                                                    settings.agents, settings.task),
+               "check_command": check_command(summary.submission, settings.mode, settings.track, settings.goal,
+                                              settings.agents)}
     emit("train run", payload, as_json, _render)
+
+
+def evaluate_command(submission: str, episodes: str, mode: str, track: str, out: str, agents: int,
+                     task: str | None) -> str:
+    """The `main-bench evaluate` command line that scores a trained submission as it was trained (mode, track,
+    team size and task) on the val split of its data set."""
+    return shlex.join(["main-bench", "evaluate", "--episodes", episodes, "--split", "val", "--agent", submission,
+                       "--mode", mode, "--track", track, "--agents", str(agents), *(["--task", task] if task else []),
+                       "--out", out])
+
+
+def check_command(submission: str, mode: str, track: str, goal: str | None, agents: int) -> str:
+    """The `main-bench evaluate check-agent` command line that checks a trained submission in its settings."""
+    return shlex.join(["main-bench", "evaluate", "check-agent", submission, "--mode", mode, "--track", track,
+                       *(["--goal", goal] if goal else []), "--agents", str(agents)])
 
 
 def _render(d: dict[str, Any]) -> str:
     last = d["last"]
+    resumed = f" (resumed from update {d['resumed_from']})" if d["resumed_from"] else ""
+    goal = f"{d['goal']} goals" if d["goal"] else "the data set's goals"
     return (f"{d['updates']} updates, {d['agent_steps']:,} agent-steps, {d['episodes']} episodes in "
-            f"{d['wall_seconds']} s (resumed from update {d['resumed_from']})\n"
-            f"last: success {last.get('success', float('nan')):.3f}, team success "
-            f"{last.get('team_success', float('nan')):.3f}, SPL {last.get('spl', float('nan')):.3f}\n"
-            f"submission: {d['submission']} (evaluate with --mode {d['mode']})")
+            f"{d['wall_seconds']} s{resumed}\n"
+            f"last: success {fraction(last.get('success'))}, team success "
+            f"{fraction(last.get('team_success'))}, SPL {fraction(last.get('spl'))}\n"
+            f"submission: {d['submission']} ({d['mode']} mode, {d['track']} track, {goal})\n"
+            f"check it:    {d['check_command']}\n"
+            f"evaluate it: {d['evaluate_command']}\n"
+            f"             (on episodes with {goal} like those it trained on; `main-bench train point-goals` "
+            "makes a point-goal copy of a data set)")
 
 
 def point_goals(
@@ -116,7 +144,10 @@ def point_goals(
     its start (agent 0's for a shared target), distances recomputed."""
     from ..training.pointgoals import point_goal_dataset
 
-    path = point_goal_dataset(src, out, overwrite=overwrite)
+    log = None if as_json else lambda line: typer.echo(line, err=True)
+    if log is not None:
+        log(f"point goals for {src} -> {out}")
+    path = point_goal_dataset(src, out, overwrite=overwrite, log=log)
     emit("train point-goals", {"out": str(path)}, as_json, lambda d: f"wrote {d['out']}")
 
 

@@ -12,7 +12,7 @@ from .common import JsonOption, emit
 
 def register(app: typer.Typer) -> None:
     """Add the `visualize` command to the root app."""
-    app.command("visualize")(visualize)
+    app.command("visualize", short_help="Picture (PNG) or animation (GIF) of one evaluated episode.")(visualize)
 
 
 def visualize(

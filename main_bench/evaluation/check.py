@@ -165,6 +165,35 @@ def check_policy(spec: str | PolicySpec, settings: CheckSettings | None = None) 
     return CheckReport(str(spec), settings, checks)
 
 
+def policy_kind(spec: PolicySpec, settings: CheckSettings) -> tuple[str, ...]:
+    """The roles (`team`, `agent`) whose protocol the submission's policy follows, learnt by loading it once in
+    its own process under the settings' sandbox and limits; () when it does not load or follows neither (the
+    `loads` and `protocol` checks then say why)."""
+    try:
+        with PolicyProcess(spec, settings.limits, settings.seed, settings.sandbox, role="any") as process:
+            return process.roles
+    except (SubmissionError, PolicyError):
+        return ()
+
+
+def mode_for(spec: PolicySpec | str, roles: tuple[str, ...], mode: str | None) -> str:
+    """The mode to check `spec` in: `mode` when given, else `central` for a team policy and `comm` for an agent
+    policy (a silent agent policy passes there too). A `mode` the policy's kind cannot play raises `InputError`."""
+    if mode is not None and mode not in MODES:
+        raise InputError(f"--mode must be one of {', '.join(MODES)}, got {mode!r}")
+    if not roles:
+        return mode or "central"
+    if mode is None:
+        return "central" if "team" in roles else "comm"
+    need = "team" if mode == "central" else "agent"
+    if need not in roles:
+        kind = ("a team policy (act(observations)), played with --mode central" if "team" in roles else
+                "an agent policy (act(observation, inbox)), played with --mode silent or comm")
+        raise InputError(f"--mode {mode} does not fit {spec}: it is {kind}; leave --mode out to check it in its "
+                         "own mode")
+    return mode
+
+
 def _script(settings: CheckSettings, info: EpisodeInfo) -> list[dict[str, dict[str, Any]]]:
     """The observations of every step: the whole team first, then (with 2+ agents) without the last agent."""
     rng = np.random.default_rng([settings.seed, 2])

@@ -30,6 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..errors import SubmissionError
+from ..suggest import did_you_mean
 
 #: Attribute names tried, in order, when a spec names none.
 DEFAULT_ATTRS: tuple[str, ...] = ("make_policy", "Policy")
@@ -110,12 +111,29 @@ def _baseline_spec(text: str) -> PolicySpec:
     folder = BASELINES_DIR / name
     if name.isidentifier() and (folder / POLICY_FILE).is_file():
         return PolicySpec("directory", str((folder / POLICY_FILE).resolve()), "", folder.resolve())
-    shipped = sorted(p.parent.name for p in BASELINES_DIR.glob(f"*/{POLICY_FILE}")) if BASELINES_DIR.is_dir() else []
-    raise SubmissionError(
-        f"policy spec {text!r}: no standalone baseline {name!r} (standalone baselines: "
-        f"{', '.join(shipped) or 'none'}); built-in evaluator baselines such as baseline:random run only "
-        "through `main-bench evaluate --agent`"
-    )
+    from .baselines import PRIVILEGED
+
+    if name in PRIVILEGED:
+        raise SubmissionError(
+            f"policy spec {text!r}: baseline:{name} is built into the evaluator (it reads the simulator's state) "
+            "and runs only through `main-bench evaluate --agent`; the standalone baselines a check or a "
+            f"submission can load are {', '.join(BASELINE_PREFIX + b for b in standalone_baselines()) or 'none'}"
+        )
+    names = all_baselines()
+    raise SubmissionError(f"policy spec {text!r}: no baseline {name!r}{did_you_mean(name, names, BASELINE_PREFIX)} "
+                          f"(baselines: {', '.join(BASELINE_PREFIX + b for b in names)})")
+
+
+def standalone_baselines() -> list[str]:
+    """The names of the baselines shipped as policy directories (`baseline:NAME` loads like any submission)."""
+    return sorted(p.parent.name for p in BASELINES_DIR.glob(f"*/{POLICY_FILE}")) if BASELINES_DIR.is_dir() else []
+
+
+def all_baselines() -> list[str]:
+    """Every `baseline:NAME` name: the evaluator's built-in (privileged) ones and the standalone ones."""
+    from .baselines import PRIVILEGED
+
+    return sorted({*PRIVILEGED, *standalone_baselines()})
 
 
 def seed_everything(seed: int) -> None:
@@ -188,12 +206,30 @@ def check_protocol(policy: Any, spec: PolicySpec | str, role: str = "team") -> A
 def load_policy(spec: PolicySpec, seed: int, role: str = "team") -> Any:
     """Load the policy `spec` names into the current process, seeding global generators with `seed`.
 
-    `role` `team` (a `TeamPolicy`, central mode) or `agent` (an `AgentPolicy`, silent and comm modes). Raises
+    `role` `team` (a `TeamPolicy`, central mode), `agent` (an `AgentPolicy`, silent and comm modes) or `any`
+    (either: what `check-agent` loads to learn the policy's kind, `policy_roles`). Raises
     `SubmissionError` (`ProtocolError` when the object lacks the role's `reset`/`act`) with the spec and the cause.
     """
-    policy = check_protocol(instantiate_policy(spec, seed), spec, role)
+    policy = instantiate_policy(spec, seed)
+    if role != "any":
+        check_protocol(policy, spec, role)
+    elif not policy_roles(policy):
+        check_protocol(policy, spec, "team")  # follows neither: the team policy's message says what is missing
     seed_everything(seed)
     return policy
+
+
+def policy_roles(policy: Any) -> tuple[str, ...]:
+    """The roles of `ROLES` whose protocol `policy` follows: `("team",)`, `("agent",)`, both (an `act(*args)`)
+    or none."""
+    roles = []
+    for role in ROLES:
+        try:
+            check_protocol(policy, "", role)
+        except ProtocolError:
+            continue
+        roles.append(role)
+    return tuple(roles)
 
 
 def _import(spec: PolicySpec) -> tuple[Any, Path | None]:

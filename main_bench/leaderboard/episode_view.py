@@ -3,6 +3,7 @@ agents' records, and (when the scene can be loaded) the scene, its navmesh and t
 
 from __future__ import annotations
 
+import shlex
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,6 +16,7 @@ from ..episodes.schema import Episode
 from ..errors import DatasetError, MainBenchError, ResultsError
 from ..evaluation.records import TEAM
 from ..evaluation.results import Results, load_results
+from ..suggest import did_you_mean
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,8 +74,13 @@ def _find_episode(dataset: Path, results: Results, episode_id: str) -> Episode:
 
     rows = results.records[results.records["episode_id"] == episode_id]
     if rows.empty:
-        some = ", ".join(sorted(results.teams["episode_id"].astype(str).unique())[:3])
-        raise ResultsError(f"no episode {episode_id!r} in these results (for example: {some})", path=results.path)
+        ids = sorted(results.teams["episode_id"].astype(str).unique())
+        splits = sorted(results.records["split"].astype(str).unique())
+        hint = did_you_mean(episode_id, ids) or f"; for example {', '.join(ids[:3])}."
+        listing = shlex.join(["main-bench", "episodes", "list", str(dataset), *(["--split", splits[0]]
+                                                                               if len(splits) == 1 else [])])
+        raise ResultsError(f"no episode {episode_id!r} in these results{hint} They hold {len(ids)} episodes; "
+                           f"`{listing}` lists the data set's", path=results.path)
     r = rows.iloc[0]
     for ep in load_episodes(dataset, str(r["split"]), str(r["task"]), int(r["agents"])):
         if ep.episode_id == episode_id:

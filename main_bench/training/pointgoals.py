@@ -16,7 +16,9 @@ from __future__ import annotations
 import gzip
 import json
 import tempfile
+import time
 import zlib
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -31,8 +33,9 @@ POINT_MARGIN_M = 0.05
 
 
 def point_goal_dataset(src: str | Path, out: str | Path, *, overwrite: bool = False,
-                       cache_dir: str | Path | None = None) -> Path:
-    """Write the point-goal copy of data set `src` to `out` (see the module docstring); returns `out`."""
+                       cache_dir: str | Path | None = None, log: Callable[[str], None] | None = None) -> Path:
+    """Write the point-goal copy of data set `src` to `out` (see the module docstring); returns `out`. `log`
+    gets a line per (task, team size, split) done: its episodes and the seconds so far."""
     from ..episodes.manifest import read_manifest
     from ..evaluation.run.resources import EpisodeResources
     from ..evaluation.scoring.task_rules import sim_settings_from_manifest
@@ -41,7 +44,9 @@ def point_goal_dataset(src: str | Path, out: str | Path, *, overwrite: bool = Fa
     resources = EpisodeResources(manifest, sim_settings_from_manifest(manifest, "auto"),
                                  None if cache_dir is None else Path(cache_dir))
     with tempfile.TemporaryDirectory(prefix="main-bench-points-") as tmp:
-        for path in export_habitat(src, tmp):
+        started = time.perf_counter()
+        files = export_habitat(src, tmp)
+        for number, path in enumerate(files, 1):
             doc = json.loads(gzip.decompress(path.read_bytes()))
             by_episode: dict[str, list[dict]] = {}
             for ep in doc["episodes"]:
@@ -50,6 +55,9 @@ def point_goal_dataset(src: str | Path, out: str | Path, *, overwrite: bool = Fa
                 agents.sort(key=lambda ep: ep["info"]["main_bench"]["agent_index"])
                 _to_points(agents, resources, manifest)
             atomic_write_bytes(path, gzip.compress(json.dumps(doc, separators=(",", ":")).encode(), mtime=0))
+            if log is not None:
+                log(f"[{number}/{len(files)}] {path.relative_to(tmp).parent}: {len(by_episode)} episodes, "
+                    f"{time.perf_counter() - started:.1f} s")
         resources.close()
         return import_habitat(tmp, out, overwrite=overwrite)
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io import atomic_write_bytes
+from ..numfmt import fraction
 from ..vector.layout import EPISODE_STATS, VecSpec
 from .curves import CURVE_COLUMNS, read_curve, write_curve
 from .gae import gae
@@ -275,7 +276,8 @@ class Trainer:
 def _progress_line(row: dict[str, float], total: int) -> str:
     return (f"update {int(row['update'])}/{total}  agent-steps {int(row['agent_steps']):,}  "
             f"{row['steps_per_second']:.0f} agent-steps/s  episodes {int(row['episodes'])}  "
-            f"success {row['success']:.2f}  team success {row['team_success']:.2f}  reward {row['reward']:.2f}")
+            f"success {fraction(row['success'])}  team success {fraction(row['team_success'])}  "
+            f"reward {'n/a' if np.isnan(row['reward']) else format(row['reward'], '.2f')}")
 
 
 def _tensorboard(run_dir: Path) -> Any:

@@ -57,7 +57,8 @@ def test_parse_baseline_comm_is_the_shipped_directory():
         ("my-team policy", "neither an existing path"),
         ("my_team.policy:", "ends with ':'"),
         ("baseline:random", "evaluate --agent"),
-        ("baseline:no_such_baseline", "no standalone baseline"),
+        ("baseline:no_such_baseline", "no baseline 'no_such_baseline' (baselines: baseline:comm, baseline:oracle, "
+                                      "baseline:random)"),
     ],
 )
 def test_bad_specs_name_the_spec_and_the_fix(spec, words):
@@ -65,6 +66,23 @@ def test_bad_specs_name_the_spec_and_the_fix(spec, words):
         parse_spec(spec)
     assert words in str(err.value)
     assert err.value.exit_code == 2
+
+
+@pytest.mark.parametrize(("typed", "meant"), [("randon", "random"), ("orcale", "oracle"), ("com", "comm")])
+def test_a_mistyped_baseline_suggests_the_closest_of_every_kind(typed, meant):
+    """Built-in (evaluator) and standalone baselines alike are suggested, whatever the command that parses."""
+    with pytest.raises(SubmissionError) as err:
+        parse_spec(f"baseline:{typed}")
+    assert f"did you mean baseline:{meant}?" in str(err.value)
+
+
+def test_a_mistyped_baseline_is_one_line_exit_2_in_evaluate_and_check_agent(cli, tmp_path):
+    for args in (("evaluate", "--episodes", tmp_path, "--agent", "baseline:randon", "--out", tmp_path / "r"),
+                 ("evaluate", "check-agent", "baseline:randon")):
+        r = cli(*args)
+        assert r.code == 2 and r.err.count("\n") == 1, r.err
+        assert "did you mean baseline:random?" in r.err
+    assert not (tmp_path / "r").exists()
 
 
 def test_directory_without_policy_py(tmp_path):

@@ -41,7 +41,12 @@ def test_point_goal_copy_draws_points_in_range_and_validates(tiny_dataset, tmp_p
                 assert e.target_floors[i] == e.start_floors[i]
     report = validate_dataset(out)
     assert report.ok, report.to_json()
-    again = point_goal_dataset(dataset, tmp_path / "again", cache_dir=cache)
+    lines: list[str] = []
+    again = point_goal_dataset(dataset, tmp_path / "again", cache_dir=cache, log=lines.append)
+    # Progress: one line per (task, team size, split) file as it is done, numbered, with its episodes.
+    assert len(lines) == 2 and lines[0].startswith("[1/2] ") and lines[1].startswith("[2/2] "), lines
+    assert {line.split()[1] for line in lines} == {"shared_n2/val:", "individual_n2/val:"}, lines
+    assert all(" episodes, " in line and line.endswith(" s") for line in lines)
     for task in ("shared", "individual"):
         a = load_episodes(out, "val", task, 2)
         b = load_episodes(again, "val", task, 2)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -74,13 +75,16 @@ def test_algo_trains_checkpoints_resumes_after_kill_and_submits(tiny_dataset, tm
     assert ours["config"] == theirs["config"]
     assert all(torch.equal(ours["model"][k], theirs["model"][k]) for k in theirs["model"])
 
+    # The commands the run prints to check and score its submission work as printed (here made quick).
     dataset, cache = tiny_dataset
     mode = summary["mode"]
-    check = _cli("evaluate", "check-agent", str(sub), "--mode", mode, "--track", "gps", "--goal", "point",
-                 "--steps", "6", "--json")
+    check_args = shlex.split(summary["check_command"])
+    assert check_args[:3] == ["main-bench", "evaluate", "check-agent"] and str(sub) in check_args
+    assert {"--mode", mode, "--track", "gps", "--goal", "point"} <= set(check_args)
+    check = _cli(*check_args[1:], "--steps", "6", "--json")
     assert check.returncode == 0, check.stdout + check.stderr
-    scored = _cli("evaluate", "--episodes", str(dataset), "--split", "val", "--agent", str(sub), "--mode", mode,
-                  "--track", "gps", "--limit", "1", "--out", str(tmp_path / "eval"), "--cache-dir", str(cache),
-                  "--no-progress", "--json")
+    eval_args = shlex.split(summary["evaluate_command"])
+    assert {"--mode", mode, "--track", "gps", "--agent", str(sub), "--episodes", str(dataset)} <= set(eval_args)
+    scored = _cli(*eval_args[1:], "--limit", "1", "--cache-dir", str(cache), "--no-progress", "--json")
     assert scored.returncode == 0, scored.stdout + scored.stderr
     assert json.loads(scored.stdout)["episodes_run"] >= 2

@@ -98,6 +98,8 @@ class PolicyProcess:
         self.seed = int(seed)
         self.sandbox = sandbox or SandboxSettings()
         self.policy_name = ""
+        #: The roles (`team`, `agent`) whose protocol the loaded policy follows (`submission.policy_roles`).
+        self.roles: tuple[str, ...] = ()
         self.load_seconds = 0.0
         #: Seconds the last call spent inside the policy, as measured in its own process.
         self.last_policy_seconds = 0.0
@@ -252,6 +254,7 @@ class PolicyProcess:
                 message += f" (memory limit {self.limits.memory_mb} MB; raise Limits.memory_mb if it needs more)"
             raise (ProtocolError if reply.get("stage") == "protocol" else SubmissionError)(message)
         self.policy_name = str(reply.get("policy", ""))
+        self.roles = tuple(str(r) for r in reply.get("roles") or ())
         self.load_seconds = time.monotonic() - started
 
     def _send(self, op: str, payload: Any, budget: float, what: str) -> None:

@@ -83,11 +83,12 @@ def _die_with_parent() -> None:
 def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
     start = time.perf_counter()
     try:
-        from ..submission import PolicySpec, ProtocolError, load_policy
+        from ..submission import PolicySpec, ProtocolError, load_policy, policy_roles
 
         spec = PolicySpec(*boot["spec"])
         try:
             policy = load_policy(spec, boot["seed"], boot.get("role", "team"))
+            roles = policy_roles(policy)
         except ProtocolError as exc:
             _reply(sock, {"status": "error", "stage": "protocol", **_describe(exc)})
             return None
@@ -99,7 +100,7 @@ def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
         _reply(sock, {"status": "error", "stage": "load", **_describe(exc), "cause_type": type(cause).__name__})
         return None
     _reply(sock, {"status": "ready", "policy": type(policy).__name__, "seconds": time.perf_counter() - start,
-                  "pid": os.getpid()})
+                  "pid": os.getpid(), "roles": roles})
     return policy
 
 
