@@ -52,24 +52,17 @@ class _Progress:
 
 
 def _render(payload: dict) -> str:
+    from ..leaderboard.format import fmt_summary_cell
+
     lines = [f"results: {payload['out']}",
              f"episodes run: {payload['episodes_run']} ({payload['chunks_skipped']} chunks already done), "
              f"{payload['agent_steps_per_second']:.0f} agent-steps/s"]
     for key, track in payload["tracks"].items():
         team = track["team"]
 
-        def cell(m: str, team=team) -> str:
-            s = team[m]
-            if s["mean"] is None:
-                return f"{m} n/a"
-            text = f"{m} {s['mean']:.3f} [{s['ci_low']:.3f}, {s['ci_high']:.3f}]"
-            if s.get("wilson_low") is not None:
-                text += f" W[{s['wilson_low']:.3f}, {s['wilson_high']:.3f}]"
-            return text
-
         talk = track.get("communication") or {}
         lines.append(f"{key}: {track['episodes']} episodes, {track['failed_episodes']} failed; "
-                     + ", ".join(cell(m) for m in ("success", "spl", "soft_spl", "distance_to_goal"))
+                     + ", ".join(fmt_summary_cell(m, team[m]) for m in ("success", "spl", "soft_spl", "distance_to_goal"))
                      + (f", {talk['bytes_per_agent_step']:.1f} message bytes/agent-step"
                         if talk.get("message_bytes") else ""))
     return "\n".join(lines)

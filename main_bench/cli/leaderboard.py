@@ -53,6 +53,8 @@ def build(
 
 
 def _render(d: dict) -> str:
+    from ..leaderboard.format import fmt_value
+
     lines = []
     for s in d["sections"]:
         lines.append(f"data set {s['manifest_hash'][:12]}" + (f" ({s['sensor_track']} track)"
@@ -60,8 +62,8 @@ def _render(d: dict) -> str:
         for key, rows in s["tracks"].items():
             lines.append(f"  {key}")
             for r in rows:
-                lines.append(f"    {r['rank']:>2}. {r['name']:<30} SPL {100 * r['spl']:5.1f}  "
-                             f"success {100 * r['success']:5.1f}  ({r['episodes']} episodes)")
+                lines.append(f"    {r['rank']:>2}. {r['name']:<30} SPL {fmt_value('spl', r['spl'])}  "
+                             f"success {fmt_value('success', r['success'])}  ({r['episodes']} episodes)")
     lines.append(f"wrote {d['index_html']}")
     lines.append(f"      {d['readme_md']}")
     lines.append(f"      {d['leaderboard_json']}")

@@ -1,27 +1,63 @@
-"""Number formatting shared by the Markdown and HTML reports: one place decides units and decimals."""
+"""Number formatting shared by the HTML and Markdown reports and the CLI: one place decides units and decimals.
+
+Rates (success, SPL, soft SPL) are fractions 0..1, as the MAIN paper prints them, with 3 decimals; an
+interval's bounds carry one decimal fewer than its mean (`0.939 [0.91, 0.96]`). Distances are metres (mean 2
+decimals), episode lengths steps (1 decimal).
+"""
 
 from __future__ import annotations
 
-from .tables import Estimate
+from typing import TYPE_CHECKING
 
-#: Metrics shown in percent (fractions in the records and in leaderboard.json).
-PERCENT = frozenset({"success", "spl", "soft_spl"})
-_DECIMALS = {"distance_to_goal": 2, "steps": 1, "collisions": 1}
+if TYPE_CHECKING:
+    from .tables import Estimate
+
+#: Metrics that are rates: fractions in the records, in leaderboard.json and as printed.
+RATES = frozenset({"success", "spl", "soft_spl", "team_success"})
+_DECIMALS = {"distance_to_goal": 2, "steps": 1, "collisions": 1, "geodesic_distance": 2, "path_length": 2}
 
 
-def fmt_value(metric: str, value: float) -> str:
-    """A metric value as printed in a table: percent with one decimal for rates, else fixed decimals."""
-    if metric in PERCENT:
-        return f"{100.0 * value:.1f}"
-    return f"{value:.{_DECIMALS.get(metric, 2)}f}"
+def decimals(metric: str) -> int:
+    """Decimals of a metric's mean as printed (3 for rates)."""
+    return 3 if metric in RATES else _DECIMALS.get(metric, 2)
+
+
+def fmt_value(metric: str, value: float | None) -> str:
+    """A metric's mean as printed: a fraction with 3 decimals for rates, else the metric's fixed decimals;
+    "n/a" for a missing value."""
+    if value is None or value != value:
+        return "n/a"
+    return f"{value:.{decimals(metric)}f}"
+
+
+def fmt_bound(metric: str, value: float | None) -> str:
+    """An interval bound as printed: one decimal fewer than the mean (at least one)."""
+    if value is None or value != value:
+        return "n/a"
+    return f"{value:.{max(1, decimals(metric) - 1)}f}"
+
+
+def fmt_interval(metric: str, lo: float | None, hi: float | None, wilson: tuple[float, float] | None = None
+                 ) -> str:
+    """`[lo, hi]`, and for a success rate with a Wilson interval ` W[lo, hi]` after it."""
+    text = f"[{fmt_bound(metric, lo)}, {fmt_bound(metric, hi)}]"
+    if wilson is not None and wilson[0] is not None:
+        text += f" W[{fmt_bound(metric, wilson[0])}, {fmt_bound(metric, wilson[1])}]"
+    return text
 
 
 def fmt_estimate(metric: str, est: Estimate) -> tuple[str, str]:
     """(mean, "[lo, hi]") as printed; a success rate adds its Wilson interval, "[lo, hi] W[lo, hi]"."""
-    ci = f"[{fmt_value(metric, est.lo)}, {fmt_value(metric, est.hi)}]"
-    if est.wilson is not None:
-        ci += f" W[{fmt_value(metric, est.wilson[0])}, {fmt_value(metric, est.wilson[1])}]"
-    return fmt_value(metric, est.mean), ci
+    return fmt_value(metric, est.mean), fmt_interval(metric, est.lo, est.hi, est.wilson)
+
+
+def fmt_summary_cell(metric: str, stat: dict) -> str:
+    """`<metric> 0.939 [0.91, 0.96]` from a summary.json team statistic ({mean, ci_low, ci_high[, wilson_low,
+    wilson_high]}), as `main-bench evaluate` prints it."""
+    if stat.get("mean") is None:
+        return f"{metric} n/a"
+    wilson = (stat["wilson_low"], stat["wilson_high"]) if stat.get("wilson_low") is not None else None
+    return f"{metric} {fmt_value(metric, stat['mean'])} {fmt_interval(metric, stat['ci_low'], stat['ci_high'], wilson)}"
 
 
 #: How the comparison of a track entry with the next one is printed.
@@ -35,13 +71,8 @@ def intervals_note(settings) -> str:
             f"seed {settings.seed}, as summary.json); success also shows its Wilson score interval W[low, high] "
             "(episodes as trials). Tracks are ranked by team SPL; 'vs next' says whether a method's team SPL "
             "differs from the next method's by a paired bootstrap over the episodes both were scored on "
-            "(95% interval of the difference excludes 0). Success, SPL and soft SPL in percent; distance to goal "
-            "in metres; episode length in steps.")
-
-
-def metric_title(metric: str, title: str) -> str:
-    """A column title with its unit (percent for rates)."""
-    return f"{title} (%)" if metric in PERCENT else title
+            "(95% interval of the difference excludes 0). Success, SPL and soft SPL are fractions (0 to 1, as "
+            "the MAIN paper prints them); distance to goal in metres; episode length in steps.")
 
 
 def fmt_bytes(value: float | None) -> str:

@@ -11,7 +11,7 @@ from html import escape
 
 from .. import __version__
 from ..evaluation.scoring.task_rules import describe_rules
-from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
+from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
 from .report import Section
 from .submissions import Submission
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TableSettings, TrackTable
@@ -54,7 +54,7 @@ def _est_cell(metric: str, est) -> str:
 
 def track_html(table: TrackTable) -> str:
     """One ranked track table."""
-    head = "".join(f"<th>{escape(metric_title(c, t))}</th>" for c, t in TRACK_METRICS)
+    head = "".join(f"<th>{escape(t)}</th>" for c, t in TRACK_METRICS)
     rows = []
     for e in table.entries:
         cls = ' class="baseline"' if e.submission.baseline else ""
@@ -72,7 +72,7 @@ def track_html(table: TrackTable) -> str:
 def table2_html(t2: Table2) -> str:
     """MAIN Table 2: a column group per agent count."""
     top = "".join(f'<th colspan="{len(TABLE2_METRICS)}">{n} agents</th>' for n in t2.agent_counts)
-    sub = "".join(f"<th>{escape(metric_title(c, t))}</th>" for _ in t2.agent_counts for c, t in TABLE2_METRICS)
+    sub = "".join(f"<th>{escape(t)}</th>" for _ in t2.agent_counts for c, t in TABLE2_METRICS)
     rows = []
     for s in t2.methods:
         cells = []

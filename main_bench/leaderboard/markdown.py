@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..evaluation.scoring.task_rules import describe_rules
-from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
+from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
 
 
@@ -21,7 +21,7 @@ def _name(sub) -> str:
 
 def track_markdown(table: TrackTable) -> str:
     """One track table: rank, method, each metric as `mean [lo, hi]`, episode count."""
-    head = ["#", "Method", "Mode"] + [metric_title(c, t) for c, t in TRACK_METRICS] + ["Bytes/agent-step",
+    head = ["#", "Method", "Mode"] + [t for c, t in TRACK_METRICS] + ["Bytes/agent-step",
                                                                                      "Episodes", "vs next"]
     lines = [f"### {track_title(table.split, table.task, table.agents)}", "",
              "| " + " | ".join(head) + " |", "|" + "|".join(["---:", ":---", ":---"] + ["---:"] * (len(head) - 3)) + "|"]
@@ -39,7 +39,7 @@ def track_markdown(table: TrackTable) -> str:
 
 def table2_markdown(t2: Table2) -> str:
     """MAIN Table 2: one column group per agent count (Length, Distance, Success rate, SPL)."""
-    head = ["Method"] + [f"{n} agents: {metric_title(c, t)}" for n in t2.agent_counts for c, t in TABLE2_METRICS]
+    head = ["Method"] + [f"{n} agents: {t}" for n in t2.agent_counts for c, t in TABLE2_METRICS]
     lines = [f"### Table 2 shape: {t2.split} · {t2.task}-target", "",
              "| " + " | ".join(head) + " |", "|" + "|".join([":---"] + ["---:"] * (len(head) - 1)) + "|"]
     for sub in t2.methods:

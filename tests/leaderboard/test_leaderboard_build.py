@@ -68,9 +68,10 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
             for m in METRICS:
                 assert values[m] == pytest.approx(expected[key][m], abs=1e-6), (key, m)
                 assert values[f"{m}_ci_low"] <= values[m] + 1e-12 <= values[f"{m}_ci_high"] + 2e-12
-            # The same numbers, as printed, in both tables (percent for rates).
-            spl_txt = f"{100 * expected[key]['spl']:.1f} [{100 * values['spl_ci_low']:.1f}, "
+            # The same numbers, as printed, in both tables (fractions for rates: mean 3 decimals, bounds 2).
+            spl_txt = f"{expected[key]['spl']:.3f} [{values['spl_ci_low']:.2f}, {values['spl_ci_high']:.2f}]"
             assert spl_txt in readme
+            assert spl_txt.replace(" [", '<span class="ci">[', 1) in page
             assert f"{expected[key]['distance_to_goal']:.2f}" in page
     # Ranked by team SPL within each track.
     for track in section["tracks"]:
@@ -90,10 +91,10 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
     assert [s["submission_metadata"]["baseline"] for s in section["submissions"]] == [False, True, True]
     assert readme.count("*(baseline)*") >= 2 and 'class="badge">baseline' in page
     assert "Table 2 shape: val · shared-target" in readme and "2 agents: Length" in readme
-    # Table 2 (MAIN paper shape): per agent count Length (steps), Distance (m), Success rate (%), SPL (%).
+    # Table 2 (MAIN paper shape): per agent count Length (steps), Distance (m), Success rate, SPL (fractions).
     for task in ("shared", "individual"):
         block = readme.split(f"### Table 2 shape: val · {task}-target")[1].split("###")[0]
-        assert "| Method | 2 agents: Length | 2 agents: Distance | 2 agents: Success rate (%) | 2 agents: SPL (%) " \
+        assert "| Method | 2 agents: Length | 2 agents: Distance | 2 agents: Success rate | 2 agents: SPL " \
                "| 3 agents: Length |" in block
         for results_dir, name in zip(three_results, ("Strong method", "Greedy baseline"), strict=False):
             row = next(line for line in block.splitlines() if line.startswith(f"| {name}"))
@@ -101,8 +102,8 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
             means = team_means(results_dir)
             want = [txt for n in (2, 3) for txt in (f"{means[f'val/{task}/{n}']['steps']:.1f}",
                                                     f"{means[f'val/{task}/{n}']['distance_to_goal']:.2f}",
-                                                    f"{100 * means[f'val/{task}/{n}']['success']:.1f}",
-                                                    f"{100 * means[f'val/{task}/{n}']['spl']:.1f}")]
+                                                    f"{means[f'val/{task}/{n}']['success']:.3f}",
+                                                    f"{means[f'val/{task}/{n}']['spl']:.3f}")]
             assert cells == want, (task, name)
     assert len(list((tmp_path / "lb" / "plots").glob("*.png"))) == len(payload["plots"]) == 5
     check_plots(tmp_path / "lb", three_results, page)
