@@ -14,8 +14,8 @@ from .figures import StatsFigure, distance_histograms, ratio_distribution, scene
 from .maps import density_figure, scene_map
 from .rooms import targets_by_room
 
-#: Version of stats.json.
-STATS_SCHEMA_VERSION = 1
+#: Version of stats.json. 2: Fig. 3a's file is geodesic_distance_per_scene (columns mean_geodesic_m, std_geodesic_m).
+STATS_SCHEMA_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -66,9 +66,9 @@ def _summary(frame, dataset: Path, maps: dict[str, str]) -> dict[str, Any]:
 def compute_stats(dataset: str | Path, out_dir: str | Path, settings: StatsSettings | None = None) -> StatsReport:
     """Draw every dataset figure of `dataset` into `out_dir` (PNG + CSV each, plus stats.json), atomically.
 
-    Figures: geodesic distance histograms by task and agent count; average episode length per scene (MAIN
-    Fig. 3a); distance to travel against the number of agents (Fig. 3b); geodesic/Euclidean ratio; object-goal
-    targets by room type where the scenes' sidecars know rooms; start and target density per scene (one row of
+    Figures: geodesic distance histograms by task and agent count; mean geodesic start-to-target distance per
+    scene (MAIN Fig. 3a); distance to travel against the number of agents (Fig. 3b); geodesic/Euclidean ratio (log
+    axis); object-goal targets by room type where the scenes' sidecars know rooms; start and target density per scene (one row of
     panels per floor) over its navigable cells when the scene's navmesh can be built.
     """
     settings = settings or StatsSettings()
