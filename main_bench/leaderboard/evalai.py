@@ -30,6 +30,7 @@ from __future__ import annotations
 from typing import Any
 
 from .. import __version__
+from ..published import portable_path, project_root
 from ..evaluation.scoring.summary import finite_or_none
 from .report import LEADERBOARD_SCHEMA_VERSION, Section
 from .submissions import Submission
@@ -49,7 +50,7 @@ def _metadata(sub: Submission) -> dict[str, Any]:
         "date": sub.date,
         "baseline": sub.baseline,
         "sandboxed": sub.sandboxed,
-        "results_dir": str(sub.results_dir),
+        "results_dir": portable_path(sub.results_dir, project_root()),
     }
 
 

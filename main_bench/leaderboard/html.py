@@ -10,6 +10,7 @@ import base64
 from html import escape
 
 from .. import __version__
+from ..published import portable_path, project_root
 from ..evaluation.scoring.task_rules import describe_rules
 from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
 from .report import Section
@@ -108,7 +109,8 @@ def _submissions_html(section: Section) -> str:
         links = _links(s)
         if links:
             parts.append(f"<br>{links}")
-        parts.append(f"<br><small>results: <code>{escape(str(s.results_dir))}</code></small>")
+        parts.append(f"<br><small>results: <code>{escape(portable_path(s.results_dir, project_root()))}</code>"
+                     "</small>")
         items.append(f"<li>{''.join(parts)}</li>")
     return f'<ul class="subs">{"".join(items)}</ul>'
 

@@ -9,12 +9,14 @@ from typing import Any
 from .. import __version__
 from ..errors import DatasetError
 from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from ..published import manifest_hash, portable_path, project_root
 from .data import agent_frame, episode_travel
 from .figures import StatsFigure, distance_histograms, ratio_distribution, scene_lengths, travel_vs_agents
 from .maps import density_figure, scene_map
 from .rooms import targets_by_room
 
-#: Version of stats.json. 2: Fig. 3a's file is geodesic_distance_per_scene (columns mean_geodesic_m, std_geodesic_m).
+#: Version of stats.json. 2: Fig. 3a's file is geodesic_distance_per_scene (columns mean_geodesic_m, std_geodesic_m);
+#: `dataset` relative to the project root (no absolute path) and `manifest_hash` beside it.
 STATS_SCHEMA_VERSION = 2
 
 
@@ -58,7 +60,8 @@ def _summary(frame, dataset: Path, maps: dict[str, str]) -> dict[str, Any]:
                        "mean_geodesic_m": float(agents["geodesic"].mean()),
                        "mean_travel_m": float(g["travel"].mean()),
                        "mean_ratio": float((agents["geodesic"] / agents["euclidean"]).mean())})
-    return {"schema_version": STATS_SCHEMA_VERSION, "toolkit_version": __version__, "dataset": str(dataset),
+    return {"schema_version": STATS_SCHEMA_VERSION, "toolkit_version": __version__,
+            "dataset": portable_path(dataset, project_root()), "manifest_hash": manifest_hash(dataset),
             "episodes": int(ep.shape[0]), "agent_starts": int(frame.shape[0]),
             "scenes": sorted(frame["scene_id"].unique().tolist()), "groups": groups, "maps": maps}
 

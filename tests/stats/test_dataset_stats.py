@@ -10,6 +10,7 @@ import pytest
 from mb_testing import need
 from stats_fixtures import SCENES, make_dataset, read_rows
 
+from main_bench.io import sha256_file
 from main_bench.stats import StatsSettings, compute_stats
 
 
@@ -63,6 +64,9 @@ def test_fig3b_travel_is_min_for_shared_and_sum_for_individual(dataset, report):
         assert r["ci_low_m"] <= r["mean_travel_m"] <= r["ci_high_m"] and r["episodes"] == len(eps)
     summary = json.loads(report.summary_json.read_text())
     assert summary["schema_version"] == 2 and summary["episodes"] == len(rows)
+    # Published as is: the data set named by its manifest hash, its path never the machine's absolute one.
+    assert summary["manifest_hash"] == sha256_file(dataset / "manifest.json")
+    assert not summary["dataset"].startswith("/") and summary["dataset"].endswith(dataset.name)
 
 
 def test_fig3a_scene_lengths_and_density_counts(dataset, report):
