@@ -30,8 +30,8 @@ from __future__ import annotations
 from typing import Any
 
 from .. import __version__
-from ..published import portable_path, project_root
 from ..evaluation.scoring.summary import finite_or_none
+from ..published import portable_path, project_root
 from .report import LEADERBOARD_SCHEMA_VERSION, Section
 from .submissions import Submission
 from .tables import TRACK_METRICS, TableSettings

@@ -10,8 +10,8 @@ import base64
 from html import escape
 
 from .. import __version__
-from ..published import portable_path, project_root
 from ..evaluation.scoring.task_rules import describe_rules
+from ..published import portable_path, project_root
 from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
 from .report import Section
 from .submissions import Submission
