@@ -23,7 +23,7 @@ from main_bench.leaderboard.plots import DISTANCE_EDGES
 episodes_dir = lb_fixtures.episodes_dir
 three_results = lb_fixtures.three_results
 METRICS = ("success", "spl", "soft_spl", "distance_to_goal", "steps", "collisions")
-FAST = LeaderboardSettings(plots=False, tables=TableSettings(n_resamples=200))
+FAST = LeaderboardSettings(plots=False, pictures=0, tables=TableSettings(n_resamples=200))
 
 
 def team_rows(results_dir: Path) -> pd.DataFrame:
@@ -202,7 +202,7 @@ def test_hostile_names_are_escaped(tmp_path, episodes_dir):
 def test_dollar_signs_in_names_are_text_not_tex(tmp_path, episodes_dir):
     name = r"Nav $\frac$ v2"
     r = make_results(tmp_path / "tex", episodes_dir, name, 0.5)
-    report = build_leaderboard([r], tmp_path / "lb", LeaderboardSettings(tables=TableSettings(n_resamples=200)))
+    report = build_leaderboard([r], tmp_path / "lb", LeaderboardSettings(pictures=0, tables=TableSettings(n_resamples=200)))
     assert len(report.figure_paths) == 5 and all(p.stat().st_size > 0 for p in report.figure_paths)
     assert name in set(pd.read_csv(tmp_path / "lb" / "plots" / "section0_methods.csv")["method"])
 
@@ -250,7 +250,7 @@ def _with_rules(results: Path, success: float, steps: int) -> Path:
 def test_each_section_shows_its_task_rules(tmp_path, episodes_dir):
     a = _with_rules(make_results(tmp_path / "a", episodes_dir, "Method A", 0.6, manifest_hash="a" * 64), 1.0, 500)
     b = _with_rules(make_results(tmp_path / "b", episodes_dir, "Method B", 0.6, manifest_hash="b" * 64), 1.5, 300)
-    report = build_leaderboard([a, b], tmp_path / "lb", LeaderboardSettings(allow_mixed=True, plots=False,
+    report = build_leaderboard([a, b], tmp_path / "lb", LeaderboardSettings(allow_mixed=True, plots=False, pictures=0,
                                                                             tables=TableSettings(n_resamples=200)))
     page, readme = report.index_html.read_text(), report.readme_md.read_text()
     for rules in ("success within 1 m; at most 500 steps per agent", "success within 1.5 m; at most 300 steps"):
