@@ -1,8 +1,8 @@
 """One page per run of the report (`runs/<run>.html` and `.md`): the command that reproduces it and a table of
 its episodes (id, scene, task, agents, team success, SPL, steps) linking to their top-down pictures.
 
-Pictures are drawn at build time with `visualize.episode_png` for the first `pictures` episodes of each track
-(split, task, agents) in episode-id order, so the build stays fast; every other episode is one
+Pictures are drawn at build time with `visualize.episode_png` for `pictures` episodes of each track (split,
+task, agents), the scenes taken in turn, so the build stays fast; every other episode is one
 `main-bench visualize` command away (the page says which).
 """
 
@@ -64,14 +64,20 @@ def episode_rows(sub: LoadedSubmission) -> list[EpisodeRow]:
 
 
 def picture_ids(rows: list[EpisodeRow], per_track: int) -> list[str]:
-    """The first `per_track` episode ids of each track (negative: every episode)."""
-    seen: dict[tuple[str, str, int], int] = {}
-    out = []
+    """`per_track` episode ids of each track (negative: every episode), taking the scenes in turn (the first
+    episode of each scene, then the second, ...), so a few pictures already show every scene of the track."""
+    tracks: dict[tuple[str, str, int], list[EpisodeRow]] = {}
     for r in rows:
-        key = (r.split, r.task, r.agents)
-        if per_track < 0 or seen.get(key, 0) < per_track:
-            seen[key] = seen.get(key, 0) + 1
-            out.append(r.episode_id)
+        tracks.setdefault((r.split, r.task, r.agents), []).append(r)
+    out = []
+    for members in tracks.values():
+        turn: dict[str, int] = {}
+        order = []
+        for r in members:
+            turn[r.scene_id] = turn.get(r.scene_id, 0) + 1
+            order.append((turn[r.scene_id], r.episode_id))
+        order.sort()
+        out += [eid for _, eid in (order if per_track < 0 else order[:per_track])]
     return out
 
 
@@ -146,8 +152,8 @@ def pictures_note(page: RunPage) -> str:
             per[(r.split, r.task, r.agents)] = per.get((r.split, r.task, r.agents), 0) + 1
     n = max(per.values()) if per else 0
     drawn = ("no pictures drawn" if n == 0 else "pictures of every episode" if len(page.pictures) == len(page.rows)
-             else "pictures of the first episode of each track" if n == 1
-             else f"pictures of the first {n} episodes of each track")
+             else "a picture of one episode of each track" if n == 1
+             else f"pictures of {n} episodes of each track (the scenes in turn)")
     return f"Team records of every episode (success and SPL as fractions); {drawn}. Draw any other episode with"
 
 

@@ -131,3 +131,13 @@ def test_pictures_option_and_build_date(tmp_path, episodes_dir, monkeypatch, cli
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
     info = BuildInfo.collect()
     assert info.date == "2023-11-14" and "CPUs" in info.machine and info.commit
+
+
+def test_pictures_take_the_scenes_in_turn():
+    from main_bench.leaderboard.episodes_page import EpisodeRow, picture_ids
+
+    rows = [EpisodeRow(f"e{k}", "A" if k < 4 else "B", "val", "shared", 2, 1.0, 1.0, 10) for k in range(8)]
+    rows += [EpisodeRow(f"f{k}", "A", "val", "shared", 3, 1.0, 1.0, 10) for k in range(3)]
+    assert picture_ids(rows, 1) == ["e0", "f0"]
+    assert picture_ids(rows, 3) == ["e0", "e4", "e1", "f0", "f1", "f2"]
+    assert len(picture_ids(rows, -1)) == len(rows) and picture_ids(rows, 0) == []
