@@ -141,3 +141,31 @@ def test_pictures_take_the_scenes_in_turn():
     assert picture_ids(rows, 1) == ["e0", "f0"]
     assert picture_ids(rows, 3) == ["e0", "e4", "e1", "f0", "f1", "f2"]
     assert len(picture_ids(rows, -1)) == len(rows) and picture_ids(rows, 0) == []
+
+
+def test_page_prints_the_summary_numbers(tmp_path, episodes_dir):
+    """Every team success and SPL cell of the page and the README is the evaluator's summary.json statistic
+    (`build_summary` on the same records), printed in the one number format."""
+    from html import escape
+
+    from main_bench.evaluation.results import load_results
+    from main_bench.evaluation.scoring.summary import build_summary
+
+    r = make_results(tmp_path / "r", episodes_dir, "Summary check", 0.6, seed=5)
+    summary = build_summary(load_results(r).records, 0, {})
+    report = build_leaderboard([r], tmp_path / "lb", LeaderboardSettings(plots=False, pictures=0, build=BUILD))
+    readme, page = report.readme_md.read_text(), report.index_html.read_text()
+    for key, track in summary["tracks"].items():
+        split, task, n = key.split("/")
+        title = f"{split} · {task}-target · {n} agents"
+        block = readme.split(f"### {title}")[1].split("###")[0]
+        row = next(line for line in block.splitlines() if "| Summary check |" in line)
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        html_block = page.split(f"<h3>{escape(title)}</h3>")[1].split("<h3>")[0]
+        for col, metric in ((3, "success"), (4, "spl")):
+            s = track["team"][metric]
+            want = f"{s['mean']:.3f} [{s['ci_low']:.2f}, {s['ci_high']:.2f}]"
+            if metric == "success":
+                want += f" W[{s['wilson_low']:.2f}, {s['wilson_high']:.2f}]"
+            assert cells[col] == want, (key, metric)
+            assert f"{s['mean']:.3f}<span class=\"ci\">[{s['ci_low']:.2f}, {s['ci_high']:.2f}]</span>" in html_block
