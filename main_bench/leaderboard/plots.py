@@ -47,6 +47,29 @@ def value_label_x(mean: float, hi: float) -> float:
     return max(mean, hi) + 0.015
 
 
+def bars_panel(ax, table: TrackTable) -> list:
+    """One track's panel of `method_bars` on `ax`; returns the value labels (matplotlib Text, one per bar)."""
+    entries = list(reversed(table.entries))
+    y = np.arange(len(entries))
+    labels = []
+    for off, metric, color in ((0.2, "success", BAR_COLORS["success"]), (-0.2, "spl", BAR_COLORS["spl"])):
+        means = np.array([e.metrics[metric].mean for e in entries])
+        lo = means - np.array([e.metrics[metric].lo for e in entries])
+        highs = np.array([e.metrics[metric].hi for e in entries])
+        ax.barh(y + off, means, height=0.38, color=color, xerr=[lo, highs - means], capsize=3,
+                label="Success" if metric == "success" else "SPL")
+        for yi, m, hi in zip(y + off, means, highs, strict=True):
+            labels.append(ax.text(value_label_x(m, hi), yi, fmt_value(metric, m), ha="left", va="center",
+                                  fontsize=7, color="#1f2328", bbox=LABEL_BOX))
+    ax.set_yticks(y, [_label(e.submission) for e in entries], fontsize=8)
+    ax.set_xlim(0, 1.17)
+    ax.set_xticks(np.linspace(0, 1, 6))
+    ax.set_xlabel("fraction (team, 95% CI)")
+    ax.set_title(f"{table.split} · {table.task} · {table.agents} agents", fontsize=10)
+    ax.grid(axis="x", alpha=0.3)
+    return labels
+
+
 def method_bars(tracks: list[TrackTable], names: list[str]) -> Figure:
     """Team success and SPL per method with 95% interval bars, one panel per track."""
     n = len(tracks)
@@ -57,23 +80,7 @@ def method_bars(tracks: list[TrackTable], names: list[str]) -> Figure:
     for ax in axes.flat[n:]:
         ax.axis("off")
     for ax, table in zip(axes.flat, tracks, strict=False):
-        entries = list(reversed(table.entries))
-        y = np.arange(len(entries))
-        for off, metric, color in ((0.2, "success", BAR_COLORS["success"]), (-0.2, "spl", BAR_COLORS["spl"])):
-            means = np.array([e.metrics[metric].mean for e in entries])
-            lo = means - np.array([e.metrics[metric].lo for e in entries])
-            highs = np.array([e.metrics[metric].hi for e in entries])
-            ax.barh(y + off, means, height=0.38, color=color, xerr=[lo, highs - means], capsize=3,
-                    label="Success" if metric == "success" else "SPL")
-            for yi, m, hi in zip(y + off, means, highs, strict=True):
-                ax.text(value_label_x(m, hi), yi, fmt_value(metric, m), ha="left", va="center", fontsize=7,
-                        color="#1f2328", bbox=LABEL_BOX)
-        ax.set_yticks(y, [_label(e.submission) for e in entries], fontsize=8)
-        ax.set_xlim(0, 1.17)
-        ax.set_xticks(np.linspace(0, 1, 6))
-        ax.set_xlabel("fraction (team, 95% CI)")
-        ax.set_title(f"{table.split} · {table.task} · {table.agents} agents", fontsize=10)
-        ax.grid(axis="x", alpha=0.3)
+        bars_panel(ax, table)
     axes.flat[0].legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     table = pd.DataFrame([{"track": t.key, "method": e.submission.name, "baseline": e.submission.baseline,
