@@ -13,7 +13,7 @@ from html import escape
 from pathlib import Path
 
 from ..errors import MainBenchError
-from ..published import portable_path, project_root
+from ..portable import portable_path, project_root
 from ..stats.maps import file_stem
 from .format import fmt_value
 from .submissions import LoadedSubmission

@@ -31,7 +31,7 @@ from typing import Any
 
 from .. import __version__
 from ..evaluation.scoring.summary import finite_or_none
-from ..published import portable_path, project_root
+from ..portable import portable_path, project_root
 from .report import LEADERBOARD_SCHEMA_VERSION, Section
 from .submissions import Submission
 from .tables import TRACK_METRICS, TableSettings

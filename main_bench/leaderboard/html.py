@@ -12,7 +12,7 @@ from html import escape
 
 from .. import __version__
 from ..evaluation.scoring.task_rules import describe_rules
-from ..published import portable_path, project_root
+from ..portable import portable_path, project_root
 from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
 from .provenance import BuildInfo
 from .report import Section

@@ -2,7 +2,7 @@
 and machine.
 
 `reproduce_command` rebuilds the `main-bench evaluate` line from a results folder's summary.json (its settings
-and submission), with paths as published (`main_bench.published`). `BuildInfo.collect` reads the date (UTC day,
+and submission), with paths as published (`main_bench.portable`). `BuildInfo.collect` reads the date (UTC day,
 or `SOURCE_DATE_EPOCH` when set, so a rebuild on the same inputs is byte-identical), `git describe` of the
 toolkit's source tree (its version where that is not a git checkout) and the platform and CPU count.
 """
@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..published import portable_path, project_root
+from ..portable import portable_path, project_root
 
 #: `main-bench evaluate` defaults: a setting equal to its default is left out of the command.
 _DEFAULTS = {"split": "val", "seed": 0, "track": "egocentric", "mode": "central", "renderer": "auto",

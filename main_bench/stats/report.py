@@ -9,7 +9,7 @@ from typing import Any
 from .. import __version__
 from ..errors import DatasetError
 from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
-from ..published import manifest_hash, portable_path, project_root
+from ..portable import manifest_hash, portable_path, project_root
 from .data import agent_frame, episode_travel
 from .figures import StatsFigure, distance_histograms, ratio_distribution, scene_lengths, travel_vs_agents
 from .maps import density_figure, scene_map

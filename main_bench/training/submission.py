@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
-from ..published import manifest_hash, portable_command, portable_path, project_root
+from ..portable import manifest_hash, portable_command, portable_path, project_root
 
 METADATA_VERSION = 1
 #: model.py's import of its observation packing, as written in the package and in a submission's copy.

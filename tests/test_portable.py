@@ -1,4 +1,4 @@
-"""Files meant for publication carry no absolute path of the machine: `main_bench.published` and the training
+"""Files meant for publication carry no absolute path of the machine: `main_bench.portable` and the training
 submission's metadata.json that uses it."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import json
 from mb_testing import REPO
 
 from main_bench.io import sha256_file
-from main_bench.published import portable_command, portable_path, project_root
+from main_bench.portable import portable_command, portable_path, project_root
 
 
 def absolute_strings(doc) -> list[str]:
