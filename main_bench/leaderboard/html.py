@@ -27,7 +27,7 @@ h3{margin-top:1.8rem}p.meta{color:#57606a;margin-top:0}
 div.table{max-width:100%;overflow-x:auto}
 table{border-collapse:collapse;margin:.6rem 0 1.2rem;font-size:.85rem}
 th,td{border:1px solid #d0d7de;padding:.25rem .45rem;text-align:right;vertical-align:top}
-th{background:#f6f8fa}td.name,th.name{text-align:left}tbody tr:nth-child(even){background:#fafbfc}
+th{background:#f6f8fa}th[colspan]{text-align:center}td.name,th.name{text-align:left}tbody tr:nth-child(even){background:#fafbfc}
 td.name{overflow-wrap:break-word;max-width:16rem}
 tr.baseline td{color:#57606a;font-style:italic}
 .ci{display:block;color:#6e7781;font-size:.72rem;white-space:nowrap}
