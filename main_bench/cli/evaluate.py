@@ -12,7 +12,6 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from ..numfmt import fraction, interval
 from .common import JsonOption, emit, parse_int_list, stderr_is_terminal
 
 app = typer.Typer(help="Evaluate a submitted policy on an episode split (a team policy, or agent policies with --mode "
@@ -55,24 +54,17 @@ class _Progress:
 
 
 def _render(payload: dict) -> str:
+    from ..leaderboard.format import fmt_summary_cell
+
     lines = [f"results: {payload['out']}",
              f"episodes run: {payload['episodes_run']} ({payload['chunks_skipped']} chunks already done), "
              f"{payload['agent_steps_per_second']:.0f} agent-steps/s"]
     for key, track in payload["tracks"].items():
         team = track["team"]
 
-        def cell(m: str, team=team) -> str:
-            s = team[m]
-            if s["mean"] is None:
-                return f"{m} n/a"
-            text = f"{m} {fraction(s['mean'])} {interval(s['ci_low'], s['ci_high'])}"
-            if s.get("wilson_low") is not None:
-                text += f" W{interval(s['wilson_low'], s['wilson_high'])}"
-            return text
-
         talk = track.get("communication") or {}
         lines.append(f"{key}: {track['episodes']} episodes, {track['failed_episodes']} failed; "
-                     + ", ".join(cell(m) for m in ("success", "spl", "soft_spl", "distance_to_goal"))
+                     + ", ".join(fmt_summary_cell(m, team[m]) for m in ("success", "spl", "soft_spl", "distance_to_goal"))
                      + (f", {talk['bytes_per_agent_step']:.1f} message bytes/agent-step"
                         if talk.get("message_bytes") else ""))
     return "\n".join(lines)

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import typer
 
-from ..numfmt import fraction
 from .common import JsonOption, emit
 
 app = typer.Typer(help="Build the leaderboard report from results directories.", rich_markup_mode=None, no_args_is_help=True)
@@ -27,12 +26,15 @@ def build(
     seed: int = typer.Option(0, "--seed", min=0, help="Seed of the bootstrap confidence intervals."),
     resamples: int = typer.Option(2000, "--resamples", min=100, help="Bootstrap resamples per interval."),
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Draw the plots (slower)."),
+    pictures: int = typer.Option(1, "--pictures", min=-1, help="Episode pictures drawn per run and track for the "
+                                 "runs' pages (runs/<run>.html; -1: every episode, 0: none; each takes about a "
+                                 "second)."),
     as_json: bool = JsonOption,
 ) -> None:
     """Rank submissions per track (split x task x agents) by team SPL, with 95% bootstrap intervals."""
     from ..leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
 
-    settings = LeaderboardSettings(allow_mixed=allow_mixed, plots=plots,
+    settings = LeaderboardSettings(allow_mixed=allow_mixed, plots=plots, pictures=pictures,
                                    tables=TableSettings(seed=seed, n_resamples=resamples))
     report = build_leaderboard(list(results), out, settings)
     payload = {
@@ -41,6 +43,7 @@ def build(
         "readme_md": str(report.readme_md),
         "leaderboard_json": str(report.leaderboard_json),
         "plots": [str(p) for p in report.figure_paths],
+        "run_pages": [str(p) for p in report.run_pages],
         "sections": [
             {"manifest_hash": s.manifest_hash, "sensor_track": s.sensor_track,
              "submissions": [sub.name for sub in s.submissions],
@@ -54,6 +57,8 @@ def build(
 
 
 def _render(d: dict) -> str:
+    from ..numfmt import fmt_value
+
     lines = []
     for s in d["sections"]:
         lines.append(f"data set {s['manifest_hash'][:12]}" + (f" ({s['sensor_track']} track)"
@@ -61,8 +66,8 @@ def _render(d: dict) -> str:
         for key, rows in s["tracks"].items():
             lines.append(f"  {key}")
             for r in rows:
-                lines.append(f"    {r['rank']:>2}. {r['name']:<30} SPL {fraction(r['spl'])}  "
-                             f"success {fraction(r['success'])}  ({r['episodes']} episodes)")
+                lines.append(f"    {r['rank']:>2}. {r['name']:<30} SPL {fmt_value('spl', r['spl'])}  "
+                             f"success {fmt_value('success', r['success'])}  ({r['episodes']} episodes)")
     lines.append(f"wrote {d['index_html']}")
     lines.append(f"      {d['readme_md']}")
     lines.append(f"      {d['leaderboard_json']}")

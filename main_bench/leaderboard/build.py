@@ -8,10 +8,12 @@ from pathlib import Path
 
 from ..errors import ResultsError
 from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from .episodes_page import RunPage, build_run_page, run_slug, write_run_pages
 from .evalai import leaderboard_json
-from .html import render_html
+from .html import CSS, render_html
 from .markdown import render_markdown
 from .plots import section_figures
+from .provenance import BuildInfo
 from .report import LeaderboardReport, Section
 from .submissions import LoadedSubmission, group_by_dataset, load_submission
 from .tables import TableSettings, build_tables
@@ -24,6 +26,10 @@ class LeaderboardSettings:
     allow_mixed: bool = False
     plots: bool = True
     tables: TableSettings = TableSettings()
+    #: Episode pictures drawn per run and track for the runs' pages (negative: all; 0: none).
+    pictures: int = 1
+    #: Date, toolkit commit and machine shown in the report (None: this build's, `BuildInfo.collect`).
+    build: BuildInfo | None = None
 
 
 def build_sections(subs: list[LoadedSubmission], settings: LeaderboardSettings) -> list[Section]:
@@ -61,6 +67,19 @@ def _shown_path(dataset: str, out: Path) -> str:
     return os.path.relpath(dataset, report) if common != os.path.sep else dataset
 
 
+def run_pages(subs: list[LoadedSubmission], sections: list[Section], pictures: int
+              ) -> list[tuple[LoadedSubmission, RunPage]]:
+    """Each shown submission (under the name its section gives it) with its run page's rows and pictures."""
+    loaded = {s.submission.results_dir: s for s in subs}
+    taken: set[str] = set()
+    out = []
+    for sec in sections:
+        for sub in sec.submissions:
+            shown = LoadedSubmission(submission=sub, records=loaded[sub.results_dir].records)
+            out.append((shown, build_run_page(shown, run_slug(shown, taken), pictures)))
+    return out
+
+
 def build_leaderboard(results_dirs: list[str | Path], out_dir: str | Path,
                       settings: LeaderboardSettings | None = None) -> LeaderboardReport:
     """Build the report of `results_dirs` into `out_dir`; every file is written atomically.
@@ -93,9 +112,14 @@ def build_leaderboard(results_dirs: list[str | Path], out_dir: str | Path,
             atomic_write_text((out / rel).with_suffix(".csv"), fig.csv_text())
             figure_files[(sec.index, fig.name)] = rel
             figure_paths.append(out / rel)
+    build = settings.build or BuildInfo.collect()
+    runs = run_pages(subs, sections, settings.pictures)
+    slugs = {sub.submission.name: page.slug for sub, page in runs}
+    pages = write_run_pages(out, runs, CSS, build.line())
     atomic_write_json(out / "leaderboard.json", leaderboard_json(sections, settings.tables))
-    atomic_write_text(out / "README.md", render_markdown(sections, settings.tables, figure_files))
-    atomic_write_text(out / "index.html", render_html(sections, settings.tables))
+    atomic_write_text(out / "README.md", render_markdown(sections, settings.tables, figure_files, slugs, build))
+    atomic_write_text(out / "index.html", render_html(sections, settings.tables, slugs, build))
     return LeaderboardReport(out_dir=out, index_html=out / "index.html", readme_md=out / "README.md",
                              leaderboard_json=out / "leaderboard.json", figure_paths=tuple(figure_paths),
+                             run_pages=tuple(pages),
                              sections=tuple(sections))

@@ -31,6 +31,7 @@ from typing import Any
 
 from .. import __version__
 from ..evaluation.scoring.summary import finite_or_none
+from ..portable import portable_path, project_root
 from .report import LEADERBOARD_SCHEMA_VERSION, Section
 from .submissions import Submission
 from .tables import TRACK_METRICS, TableSettings
@@ -49,7 +50,7 @@ def _metadata(sub: Submission) -> dict[str, Any]:
         "date": sub.date,
         "baseline": sub.baseline,
         "sandboxed": sub.sandboxed,
-        "results_dir": str(sub.results_dir),
+        "results_dir": portable_path(sub.results_dir, project_root()),
     }
 
 

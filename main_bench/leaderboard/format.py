@@ -1,27 +1,42 @@
-"""Number formatting shared by the Markdown and HTML reports: one place decides units and decimals."""
+"""Number formatting shared by the HTML and Markdown reports and the CLI: one place decides units and decimals.
+
+The numbers themselves follow `main_bench.numfmt` (rates as fractions with 3 decimals, bounds too:
+`0.939 [0.912, 0.961]`); this module adds the report's cells, notes and titles.
+"""
 
 from __future__ import annotations
 
-from .tables import Estimate
+from typing import TYPE_CHECKING
 
-#: Metrics shown in percent (fractions in the records and in leaderboard.json).
-PERCENT = frozenset({"success", "spl", "soft_spl"})
-_DECIMALS = {"distance_to_goal": 2, "steps": 1, "collisions": 1}
+from ..numfmt import fmt_value, interval
+
+if TYPE_CHECKING:
+    from .tables import Estimate
+
+__all__ = ["fmt_value", "fmt_interval", "fmt_estimate", "fmt_summary_cell"]
 
 
-def fmt_value(metric: str, value: float) -> str:
-    """A metric value as printed in a table: percent with one decimal for rates, else fixed decimals."""
-    if metric in PERCENT:
-        return f"{100.0 * value:.1f}"
-    return f"{value:.{_DECIMALS.get(metric, 2)}f}"
+def fmt_interval(metric: str, lo: float | None, hi: float | None, wilson: tuple[float, float] | None = None
+                 ) -> str:
+    """`[lo, hi]`, and for a success rate with a Wilson interval ` W[lo, hi]` after it."""
+    text = interval(lo, hi, metric)
+    if wilson is not None and wilson[0] is not None:
+        text += f" W{interval(wilson[0], wilson[1], metric)}"
+    return text
 
 
 def fmt_estimate(metric: str, est: Estimate) -> tuple[str, str]:
     """(mean, "[lo, hi]") as printed; a success rate adds its Wilson interval, "[lo, hi] W[lo, hi]"."""
-    ci = f"[{fmt_value(metric, est.lo)}, {fmt_value(metric, est.hi)}]"
-    if est.wilson is not None:
-        ci += f" W[{fmt_value(metric, est.wilson[0])}, {fmt_value(metric, est.wilson[1])}]"
-    return fmt_value(metric, est.mean), ci
+    return fmt_value(metric, est.mean), fmt_interval(metric, est.lo, est.hi, est.wilson)
+
+
+def fmt_summary_cell(metric: str, stat: dict) -> str:
+    """`<metric> 0.939 [0.912, 0.961]` from a summary.json team statistic ({mean, ci_low, ci_high[, wilson_low,
+    wilson_high]}), as `main-bench evaluate` prints it."""
+    if stat.get("mean") is None:
+        return f"{metric} n/a"
+    wilson = (stat["wilson_low"], stat["wilson_high"]) if stat.get("wilson_low") is not None else None
+    return f"{metric} {fmt_value(metric, stat['mean'])} {fmt_interval(metric, stat['ci_low'], stat['ci_high'], wilson)}"
 
 
 #: How the comparison of a track entry with the next one is printed.
@@ -35,13 +50,8 @@ def intervals_note(settings) -> str:
             f"seed {settings.seed}, as summary.json); success also shows its Wilson score interval W[low, high] "
             "(episodes as trials). Tracks are ranked by team SPL; 'vs next' says whether a method's team SPL "
             "differs from the next method's by a paired bootstrap over the episodes both were scored on "
-            "(95% interval of the difference excludes 0). Success, SPL and soft SPL in percent; distance to goal "
-            "in metres; episode length in steps.")
-
-
-def metric_title(metric: str, title: str) -> str:
-    """A column title with its unit (percent for rates)."""
-    return f"{title} (%)" if metric in PERCENT else title
+            "(95% interval of the difference excludes 0). Success, SPL and soft SPL are fractions (0 to 1, as "
+            "the MAIN paper prints them); distance to goal in metres; episode length in steps.")
 
 
 def fmt_bytes(value: float | None) -> str:

@@ -7,29 +7,35 @@ http(s) links become anchors.
 from __future__ import annotations
 
 import base64
+from collections.abc import Mapping
 from html import escape
 
 from .. import __version__
 from ..evaluation.scoring.task_rules import describe_rules
-from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
+from ..portable import portable_path, project_root
+from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
+from .provenance import BuildInfo
 from .report import Section
 from .submissions import Submission
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TableSettings, TrackTable
 
-_CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2rem auto;max-width:1200px;
+CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2rem auto;max-width:1320px;
 padding:0 1rem;color:#1f2328;background:#fff}
 h1{font-size:1.7rem;margin-bottom:.2rem}h2{border-bottom:2px solid #d0d7de;padding-bottom:.3rem;margin-top:2.5rem}
 h3{margin-top:1.8rem}p.meta{color:#57606a;margin-top:0}
-table{border-collapse:collapse;margin:.6rem 0 1.2rem;font-size:.9rem}
-th,td{border:1px solid #d0d7de;padding:.3rem .55rem;text-align:right;vertical-align:top}
-th{background:#f6f8fa}td.name,th.name{text-align:left}tbody tr:nth-child(even){background:#fafbfc}
+div.table{max-width:100%;overflow-x:auto}
+table{border-collapse:collapse;margin:.6rem 0 1.2rem;font-size:.85rem}
+th,td{border:1px solid #d0d7de;padding:.25rem .45rem;text-align:right;vertical-align:top}
+th{background:#f6f8fa}th[colspan]{text-align:center}td.name,th.name{text-align:left}tbody tr:nth-child(even){background:#fafbfc}
+td.name{overflow-wrap:break-word;max-width:16rem}
 tr.baseline td{color:#57606a;font-style:italic}
-.ci{display:block;color:#6e7781;font-size:.75rem;white-space:nowrap}
+.ci{display:block;color:#6e7781;font-size:.72rem;white-space:nowrap}
 .badge{display:inline-block;font-size:.7rem;font-style:normal;background:#ddf4ff;color:#0969da;border-radius:.6rem;
 padding:0 .45rem;margin-left:.35rem}.badge.unsandboxed{background:#ffebe9;color:#cf222e}
 figure{margin:1rem 0 2rem}figure img{max-width:100%;border:1px solid #d0d7de}
 figcaption{color:#57606a;font-size:.85rem}code{background:#f6f8fa;padding:0 .25rem}
+pre{background:#f6f8fa;padding:.5rem .7rem;white-space:pre-wrap;overflow-wrap:anywhere;font-size:.8rem}
 ul.subs li{margin-bottom:.4rem}
 """
 
@@ -49,12 +55,13 @@ def _name_cell(sub: Submission) -> str:
 
 def _est_cell(metric: str, est) -> str:
     mean, ci = fmt_estimate(metric, est)
-    return f'<td>{mean}<span class="ci">{ci}</span></td>'
+    lines = "".join(f'<span class="ci">{part}</span>' for part in ci.replace(" W[", "\nW[").split("\n"))
+    return f"<td>{mean}{lines}</td>"
 
 
 def track_html(table: TrackTable) -> str:
     """One ranked track table."""
-    head = "".join(f"<th>{escape(metric_title(c, t))}</th>" for c, t in TRACK_METRICS)
+    head = "".join(f"<th>{escape(t)}</th>" for c, t in TRACK_METRICS)
     rows = []
     for e in table.entries:
         cls = ' class="baseline"' if e.submission.baseline else ""
@@ -64,15 +71,15 @@ def track_html(table: TrackTable) -> str:
                     f"<td>{fmt_bytes(e.bytes_per_step)}</td><td>{e.episodes}</td>"
                     f"<td>{escape(VERSUS[e.versus_label])}</td></tr>")
     return (f"<h3>{escape(track_title(table.split, table.task, table.agents))}</h3>\n"
-            f'<table><thead><tr><th>#</th><th class="name">Method</th><th class="name">Mode</th>{head}'
-            "<th>Bytes/agent-step</th><th>Episodes</th><th>vs next</th></tr></thead>"
-            f"<tbody>{''.join(rows)}</tbody></table>")
+            f'<div class="table"><table><thead><tr><th>#</th><th class="name">Method</th><th class="name">Mode</th>'
+            f"{head}<th>Bytes/agent-step</th><th>Episodes</th><th>vs next</th></tr></thead>"
+            f"<tbody>{''.join(rows)}</tbody></table></div>")
 
 
 def table2_html(t2: Table2) -> str:
     """MAIN Table 2: a column group per agent count."""
     top = "".join(f'<th colspan="{len(TABLE2_METRICS)}">{n} agents</th>' for n in t2.agent_counts)
-    sub = "".join(f"<th>{escape(metric_title(c, t))}</th>" for _ in t2.agent_counts for c, t in TABLE2_METRICS)
+    sub = "".join(f"<th>{escape(t)}</th>" for _ in t2.agent_counts for c, t in TABLE2_METRICS)
     rows = []
     for s in t2.methods:
         cells = []
@@ -83,8 +90,8 @@ def table2_html(t2: Table2) -> str:
         cls = ' class="baseline"' if s.baseline else ""
         rows.append(f"<tr{cls}>{_name_cell(s)}{''.join(cells)}</tr>")
     return (f"<h3>Table 2 shape: {escape(t2.split)} · {escape(t2.task)}-target</h3>\n"
-            f'<table><thead><tr><th class="name" rowspan="2">Method</th>{top}</tr><tr>{sub}</tr></thead>'
-            f"<tbody>{''.join(rows)}</tbody></table>")
+            f'<div class="table"><table><thead><tr><th class="name" rowspan="2">Method</th>{top}</tr><tr>{sub}</tr>'
+            f"</thead><tbody>{''.join(rows)}</tbody></table></div>")
 
 
 def _links(sub: Submission) -> str:
@@ -97,7 +104,17 @@ def _links(sub: Submission) -> str:
     return " · ".join(out)
 
 
-def _submissions_html(section: Section) -> str:
+def _run_html(sub: Submission, runs: Mapping[str, str]) -> str:
+    """The submission's reproduce command and the link to its run page (episodes and pictures)."""
+    out = ""
+    if sub.name in runs:
+        out += (f'<br><a href="runs/{escape(runs[sub.name], quote=True)}.html">episodes and pictures</a>')
+    if sub.command:
+        out += f"<br>reproduce: <code>{escape(sub.command)}</code>"
+    return out
+
+
+def _submissions_html(section: Section, runs: Mapping[str, str]) -> str:
     items = []
     for s in section.submissions:
         parts = [f"<strong>{escape(s.name)}</strong>{_badges(s)}"]
@@ -108,17 +125,18 @@ def _submissions_html(section: Section) -> str:
         links = _links(s)
         if links:
             parts.append(f"<br>{links}")
-        parts.append(f"<br><small>results: <code>{escape(str(s.results_dir))}</code></small>")
+        parts.append(f"<br><small>results: <code>{escape(portable_path(s.results_dir, project_root()))}</code>"
+                     f"{_run_html(s, runs)}</small>")
         items.append(f"<li>{''.join(parts)}</li>")
     return f'<ul class="subs">{"".join(items)}</ul>'
 
 
-def _section_html(section: Section) -> str:
+def _section_html(section: Section, runs: Mapping[str, str]) -> str:
     parts = [f'<h2 id="section-{section.index}">{escape(section.title)}</h2>',
              f'<p class="meta">Episodes: <code>{escape(section.dataset_path or "(path not recorded)")}</code>, '
              f"manifest hash <code>{escape(section.manifest_hash)}</code></p>",
              f'<p class="meta">Task rules: {escape(describe_rules(section.task_rules) or "(not recorded)")}</p>',
-             "<h3>Submissions</h3>", _submissions_html(section)]
+             "<h3>Submissions</h3>", _submissions_html(section, runs)]
     parts += [track_html(t) for t in section.tracks]
     parts += [table2_html(t) for t in section.table2]
     if section.figures:
@@ -133,8 +151,10 @@ def _section_html(section: Section) -> str:
     return "\n".join(parts)
 
 
-def render_html(sections: list[Section], settings: TableSettings) -> str:
-    """The whole page."""
+def render_html(sections: list[Section], settings: TableSettings, runs: Mapping[str, str] | None = None,
+                build: BuildInfo | None = None) -> str:
+    """The whole page; `runs` maps submission names to their run pages' stems, `build` says when, with which
+    toolkit commit and on which machine it was built."""
     note = (intervals_note(settings) + " Coordination "
             "modes are their own sections: central (one team policy sees every agent's observation, an upper "
             "reference), silent (one policy per agent, no messages), comm (one policy per agent, messages "
@@ -143,12 +163,13 @@ def render_html(sections: list[Section], settings: TableSettings) -> str:
     if len(sections) > 1:
         warn = ('<p class="meta"><strong>These submissions were scored on different data sets, sensor tracks or modes; '
                 "each section is ranked on its own and numbers must not be compared across sections.</strong></p>")
-    body = "\n".join(_section_html(s) for s in sections)
+    body = "\n".join(_section_html(s, runs or {}) for s in sections)
+    built = escape(build.line()) if build is not None else f"Built by main-bench {escape(__version__)}."
     return (
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
-        f"<title>MAIN leaderboard</title><style>{_CSS}</style></head><body>\n"
+        f"<title>MAIN leaderboard</title><style>{CSS}</style></head><body>\n"
         "<h1>MAIN benchmark leaderboard</h1>\n"
-        f'<p class="meta">Multi-Agent Indoor Navigation · built by main-bench {escape(__version__)}</p>\n'
+        f'<p class="meta">Multi-Agent Indoor Navigation · {built}</p>\n'
         f"<p>{escape(note)}</p>\n{warn}\n{body}\n</body></html>\n"
     )

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from ..evaluation.scoring.task_rules import describe_rules
-from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
+from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
+from .provenance import BuildInfo
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
 
 
@@ -21,7 +24,7 @@ def _name(sub) -> str:
 
 def track_markdown(table: TrackTable) -> str:
     """One track table: rank, method, each metric as `mean [lo, hi]`, episode count."""
-    head = ["#", "Method", "Mode"] + [metric_title(c, t) for c, t in TRACK_METRICS] + ["Bytes/agent-step",
+    head = ["#", "Method", "Mode"] + [t for c, t in TRACK_METRICS] + ["Bytes/agent-step",
                                                                                      "Episodes", "vs next"]
     lines = [f"### {track_title(table.split, table.task, table.agents)}", "",
              "| " + " | ".join(head) + " |", "|" + "|".join(["---:", ":---", ":---"] + ["---:"] * (len(head) - 3)) + "|"]
@@ -39,7 +42,7 @@ def track_markdown(table: TrackTable) -> str:
 
 def table2_markdown(t2: Table2) -> str:
     """MAIN Table 2: one column group per agent count (Length, Distance, Success rate, SPL)."""
-    head = ["Method"] + [f"{n} agents: {metric_title(c, t)}" for n in t2.agent_counts for c, t in TABLE2_METRICS]
+    head = ["Method"] + [f"{n} agents: {t}" for n in t2.agent_counts for c, t in TABLE2_METRICS]
     lines = [f"### Table 2 shape: {t2.split} · {t2.task}-target", "",
              "| " + " | ".join(head) + " |", "|" + "|".join([":---"] + ["---:"] * (len(head) - 1)) + "|"]
     for sub in t2.methods:
@@ -56,7 +59,7 @@ def table2_markdown(t2: Table2) -> str:
     return "\n".join(lines)
 
 
-def _submissions_markdown(section) -> str:
+def _submissions_markdown(section, runs: Mapping[str, str]) -> str:
     lines = []
     for s in section.submissions:
         text = f"- **{md_escape(s.name)}**" + "".join(f" *({m})*" for m in s.marks)
@@ -67,17 +70,24 @@ def _submissions_markdown(section) -> str:
         links = [f"<{u}>" for u in s.links if u.startswith(("http://", "https://")) and " " not in u and ">" not in u]
         if links:
             text += " " + " ".join(links)
+        if s.name in runs:
+            text += f" · [episodes and pictures](runs/{runs[s.name]}.md)"
+        if s.command:
+            text += f"\n  reproduce: `{s.command.replace('`', '')}`"
         lines.append(text)
     return "\n".join(lines)
 
 
-def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]) -> str:
-    """README.md: the same tables as the HTML page, with links to the plot files written beside it."""
-    out = ["# MAIN benchmark leaderboard", "",
-           intervals_note(settings) + " Coordination "
-           "modes are their own sections: `central` (one team policy sees every agent's observation, an upper "
-           "reference), `silent` (one policy per agent, no messages), `comm` (one policy per agent, messages "
-           "counted); bytes/agent-step is the mean message size per agent and step (– where not measured).", ""]
+def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str],
+                    runs: Mapping[str, str] | None = None, build: BuildInfo | None = None) -> str:
+    """README.md: the same tables as the HTML page, with links to the plot files and run pages beside it."""
+    out = ["# MAIN benchmark leaderboard", ""]
+    if build is not None:
+        out += [build.line(), ""]
+    out += [intervals_note(settings) + " Coordination "
+            "modes are their own sections: `central` (one team policy sees every agent's observation, an upper "
+            "reference), `silent` (one policy per agent, no messages), `comm` (one policy per agent, messages "
+            "counted); bytes/agent-step is the mean message size per agent and step (– where not measured).", ""]
     if len(sections) > 1:
         out += ["**These submissions were scored on different data sets, sensor tracks or modes; each section is "
                 "ranked on its own and numbers must not be compared across sections.**", ""]
@@ -85,7 +95,7 @@ def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]
         out += [f"## {md_escape(sec.title)}", "",
                 f"Episodes: `{sec.dataset_path or '(path not recorded)'}`, manifest hash `{sec.manifest_hash}`", "",
                 f"Task rules: {md_escape(describe_rules(sec.task_rules) or '(not recorded)')}", "",
-                _submissions_markdown(sec), ""]
+                _submissions_markdown(sec, runs or {}), ""]
         out += [track_markdown(t) + "\n" for t in sec.tracks]
         out += [table2_markdown(t) + "\n" for t in sec.table2]
         if sec.figures:

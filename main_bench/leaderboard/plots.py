@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from ..stats.figures import png_bytes  # noqa: E402
+from .format import fmt_value  # noqa: E402
 from .report import Figure  # noqa: E402
 from .submissions import LoadedSubmission  # noqa: E402
 from .tables import TableSettings, TrackTable, estimate  # noqa: E402
@@ -35,6 +36,40 @@ def _label(sub) -> str:
     return _plain(sub.name) + "".join(f" ({m})" for m in sub.marks)
 
 
+#: Bar colours of the method plot. Value labels are dark text on a white box just right of each bar's interval
+#: (the axis runs past 1 to leave room), so they read the same on short and long bars.
+BAR_COLORS = {"success": "#4c72b0", "spl": "#dd8452"}
+LABEL_BOX = {"boxstyle": "square,pad=0.1", "facecolor": "white", "edgecolor": "none", "alpha": 0.85}
+
+
+def value_label_x(mean: float, hi: float) -> float:
+    """Where a bar's value label starts: just right of the bar and its interval."""
+    return max(mean, hi) + 0.015
+
+
+def bars_panel(ax, table: TrackTable) -> list:
+    """One track's panel of `method_bars` on `ax`; returns the value labels (matplotlib Text, one per bar)."""
+    entries = list(reversed(table.entries))
+    y = np.arange(len(entries))
+    labels = []
+    for off, metric, color in ((0.2, "success", BAR_COLORS["success"]), (-0.2, "spl", BAR_COLORS["spl"])):
+        means = np.array([e.metrics[metric].mean for e in entries])
+        lo = means - np.array([e.metrics[metric].lo for e in entries])
+        highs = np.array([e.metrics[metric].hi for e in entries])
+        ax.barh(y + off, means, height=0.38, color=color, xerr=[lo, highs - means], capsize=3,
+                label="Success" if metric == "success" else "SPL")
+        for yi, m, hi in zip(y + off, means, highs, strict=True):
+            labels.append(ax.text(value_label_x(m, hi), yi, fmt_value(metric, m), ha="left", va="center",
+                                  fontsize=7, color="#1f2328", bbox=LABEL_BOX))
+    ax.set_yticks(y, [_label(e.submission) for e in entries], fontsize=8)
+    ax.set_xlim(0, 1.17)
+    ax.set_xticks(np.linspace(0, 1, 6))
+    ax.set_xlabel("fraction (team, 95% CI)")
+    ax.set_title(f"{table.split} · {table.task} · {table.agents} agents", fontsize=10)
+    ax.grid(axis="x", alpha=0.3)
+    return labels
+
+
 def method_bars(tracks: list[TrackTable], names: list[str]) -> Figure:
     """Team success and SPL per method with 95% interval bars, one panel per track."""
     n = len(tracks)
@@ -45,21 +80,7 @@ def method_bars(tracks: list[TrackTable], names: list[str]) -> Figure:
     for ax in axes.flat[n:]:
         ax.axis("off")
     for ax, table in zip(axes.flat, tracks, strict=False):
-        entries = list(reversed(table.entries))
-        y = np.arange(len(entries))
-        for off, metric, color in ((0.2, "success", "#4c72b0"), (-0.2, "spl", "#dd8452")):
-            means = np.array([e.metrics[metric].mean for e in entries]) * 100
-            lo = means - np.array([e.metrics[metric].lo for e in entries]) * 100
-            hi = np.array([e.metrics[metric].hi for e in entries]) * 100 - means
-            ax.barh(y + off, means, height=0.38, color=color, xerr=[lo, hi], capsize=3,
-                    label="Success" if metric == "success" else "SPL")
-            for yi, m in zip(y + off, means, strict=True):
-                ax.text(1, yi, f"{m:.1f}", va="center", fontsize=7, color="white" if m > 8 else "black")
-        ax.set_yticks(y, [_label(e.submission) for e in entries], fontsize=8)
-        ax.set_xlim(0, 100)
-        ax.set_xlabel("% (team, 95% CI)")
-        ax.set_title(f"{table.split} · {table.task} · {table.agents} agents", fontsize=10)
-        ax.grid(axis="x", alpha=0.3)
+        bars_panel(ax, table)
     axes.flat[0].legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     table = pd.DataFrame([{"track": t.key, "method": e.submission.name, "baseline": e.submission.baseline,
@@ -105,9 +126,9 @@ def success_by_distance(subs: list[LoadedSubmission], settings: TableSettings) -
             t = table[(table["task"] == task) & (table["method"] == s.submission.name)]
             if t.empty:
                 continue
-            m = t["success"].to_numpy() * 100
+            m = t["success"].to_numpy()
             ax.errorbar(t["bin"].to_numpy() + (k - (len(subs) - 1) / 2) * 0.06, m,
-                        yerr=[m - t["ci_low"].to_numpy() * 100, t["ci_high"].to_numpy() * 100 - m], marker="o",
+                        yerr=[m - t["ci_low"].to_numpy(), t["ci_high"].to_numpy() - m], marker="o",
                         capsize=3, color=colors[s.submission.name], label=_label(s.submission))
         labels = [f"{edges[b]:g}–{edges[b + 1]:g}" if np.isfinite(edges[b + 1]) else f">{edges[b]:g}"
                   for b in range(first, last + 1)]
@@ -115,8 +136,8 @@ def success_by_distance(subs: list[LoadedSubmission], settings: TableSettings) -
         ax.set_xlim(first - 0.4, last + 0.4)
         ax.set_xlabel("episode geodesic distance L (m): " + ("min over agents" if task == "shared"
                                                               else "sum over agents"))
-        ax.set_ylabel("team success (%)")
-        ax.set_ylim(-3, 103)
+        ax.set_ylabel("team success (fraction)")
+        ax.set_ylim(-0.03, 1.03)
         ax.set_title(f"{task}-target", fontsize=10)
         ax.grid(alpha=0.3)
     axes.flat[0].legend(fontsize=8)
@@ -145,19 +166,19 @@ def scene_heatmap(subs: list[LoadedSubmission], metric: str = "success") -> Figu
                     grid[i, j] = by_scene.loc[sc, "mean"]
                     rows.append({"task": task, "method": s.submission.name, "scene_id": sc,
                                  "episodes": int(by_scene.loc[sc, "count"]), metric: float(grid[i, j])})
-        im = ax.imshow(np.ma.masked_invalid(grid * 100), vmin=0, vmax=100, cmap="viridis", aspect="auto")
+        im = ax.imshow(np.ma.masked_invalid(grid), vmin=0, vmax=1, cmap="viridis", aspect="auto")
         for i in range(grid.shape[0]):
             for j in range(grid.shape[1]):
                 if np.isfinite(grid[i, j]):
-                    v = grid[i, j] * 100
-                    ax.text(j, i, f"{v:.0f}", ha="center", va="center", fontsize=8,
-                            color="white" if v < 60 else "black")
+                    v = grid[i, j]
+                    ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=8,
+                            color="white" if v < 0.6 else "black")
         ax.set_xticks(range(len(scenes)), [_plain(sc) for sc in scenes], rotation=40, ha="right", fontsize=8)
         ax.set_yticks(range(len(subs)), names, fontsize=8)
-        ax.set_title(f"{task}-target: team {metric} (%) per scene", fontsize=10)
+        ax.set_title(f"{task}-target: team {metric} per scene (fraction)", fontsize=10)
         fig.colorbar(im, ax=ax, fraction=0.03)
     fig.tight_layout()
-    return Figure(f"scenes_{metric}", f"Mean team {metric} (%) per method and scene (splits and team sizes "
+    return Figure(f"scenes_{metric}", f"Mean team {metric} (fraction) per method and scene (splits and team sizes "
                   "pooled; blank: no episodes).", png_bytes(fig), pd.DataFrame(rows))
 
 
@@ -175,15 +196,15 @@ def agents_breakdown(tracks: list[TrackTable], names: list[str]) -> Figure:
                 if not pts:
                     continue
                 xs = np.array([a for a, _ in pts], dtype=float) + (k - (len(names) - 1) / 2) * 0.04
-                m = np.array([e.metrics[metric].mean for _, e in pts]) * 100
-                lo = m - np.array([e.metrics[metric].lo for _, e in pts]) * 100
-                hi = np.array([e.metrics[metric].hi for _, e in pts]) * 100 - m
+                m = np.array([e.metrics[metric].mean for _, e in pts])
+                lo = m - np.array([e.metrics[metric].lo for _, e in pts])
+                hi = np.array([e.metrics[metric].hi for _, e in pts]) - m
                 label = _label(pts[0][1].submission)
                 ax.errorbar(xs, m, yerr=[lo, hi], marker="o", capsize=3, color=colors[name], label=label)
             ax.set_xticks(sorted({t.agents for t in mine}))
             ax.set_xlabel("number of agents")
-            ax.set_ylabel(f"team {'success' if metric == 'success' else 'SPL'} (%)")
-            ax.set_ylim(-3, 103)
+            ax.set_ylabel(f"team {'success' if metric == 'success' else 'SPL'} (fraction)")
+            ax.set_ylim(-0.03, 1.03)
             ax.set_title(f"{split} · {task}-target", fontsize=10)
             ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=8)

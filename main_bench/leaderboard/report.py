@@ -70,3 +70,5 @@ class LeaderboardReport:
     leaderboard_json: Path
     figure_paths: tuple[Path, ...]
     sections: tuple[Section, ...]
+    #: runs/<run>.html of each submission: its reproduce command and per-episode table with pictures.
+    run_pages: tuple[Path, ...] = ()

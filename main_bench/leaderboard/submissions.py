@@ -16,6 +16,7 @@ import pandas as pd
 from ..errors import ResultsError
 from ..evaluation.records import TEAM
 from ..evaluation.results import Results, load_results
+from .provenance import reproduce_command
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,8 @@ class Submission:
     task_rules: Mapping[str, Any] = field(default_factory=dict, compare=False)
     mode: str = "central"
     message_floats: int = 0
+    #: The `main-bench evaluate` line that reproduces the results ("" where summary.json records no settings).
+    command: str = field(default="", compare=False)
 
     @property
     def marks(self) -> tuple[str, ...]:
@@ -95,6 +98,7 @@ def submission_from_results(results: Results) -> Submission:
         task_rules=dict(summary.get("task_rules") or {}) if isinstance(summary.get("task_rules"), dict) else {},
         mode=mode,
         message_floats=int(floats) if isinstance(floats, int) and not isinstance(floats, bool) else 0,
+        command=reproduce_command(summary),
     )
 
 

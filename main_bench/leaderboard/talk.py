@@ -1,7 +1,7 @@
 """Who talked when: the message timeline drawn under an episode's top-down picture (comm mode).
 
 In: an `EpisodeView` whose trajectory has the `message_bytes` / `message_to` columns. Out: one row per agent,
-one tick per step it sent a message (its shade of blue when broadcast, orange when addressed to one teammate),
+one tick per step it sent a message (the agent's colour when broadcast, black when addressed to one teammate),
 and a title with the episode's message and byte counts.
 """
 
@@ -11,7 +11,7 @@ import numpy as np
 
 from .episode_view import EpisodeView
 
-ADDRESSED_ORANGE = "#e36c0a"
+ADDRESSED_BLACK = "#1f2328"
 
 
 def has_messages(view: EpisodeView) -> bool:
@@ -20,14 +20,14 @@ def has_messages(view: EpisodeView) -> bool:
     return "message_bytes" in traj and bool((traj["message_bytes"].fillna(0) > 0).any())
 
 
-def draw_timeline(ax, view: EpisodeView, blues: list) -> None:
+def draw_timeline(ax, view: EpisodeView, colors: list) -> None:
     """Ticks of every message on `ax`: x the step, y the agent (see the module docstring)."""
     traj = view.trajectory
     sent = traj[traj["message_bytes"].fillna(0) > 0]
     n = view.episode.num_agents
     for i in range(n):
         mine = sent[sent["agent_index"] == i]
-        for addressed, colour in ((False, blues[i]), (True, ADDRESSED_ORANGE)):
+        for addressed, colour in ((False, colors[i]), (True, ADDRESSED_BLACK)):
             rows = mine[(mine["message_to"] >= 0) == addressed]
             if len(rows):
                 ax.scatter(rows["step"], np.full(len(rows), i), marker="|", s=60, color=colour, linewidths=1.2)
@@ -37,5 +37,5 @@ def draw_timeline(ax, view: EpisodeView, blues: list) -> None:
     ax.set_xlabel("step", fontsize=8)
     ax.tick_params(axis="x", labelsize=7)
     total = int(sent["message_bytes"].sum())
-    ax.set_title(f"messages: {len(sent)} sent, {total} bytes (blue: to every teammate, orange: to one)",
+    ax.set_title(f"messages: {len(sent)} sent, {total} bytes (agent's colour: to every teammate, black: to one)",
                  fontsize=8)

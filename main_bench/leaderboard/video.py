@@ -17,7 +17,7 @@ from PIL import Image  # noqa: E402
 
 from ..errors import InputError  # noqa: E402
 from .episode_view import EpisodeView  # noqa: E402
-from .visualize import agent_blues, draw_background, draw_failures, draw_walked, episode_title  # noqa: E402
+from .visualize import agent_colors, draw_background, draw_failures, draw_walked, episode_title  # noqa: E402
 
 
 def frame_steps(last_step: int, max_frames: int) -> np.ndarray:
@@ -78,7 +78,7 @@ def _layout(view: EpisodeView, rgb_shape: tuple[int, int]):
     grid = fig.add_gridspec(rows, 2, width_ratios=[map_w, view_w], left=0.9 / width, right=0.98,
                             bottom=0.6 / height, top=1.0 - 0.55 / height, wspace=0.06, hspace=0.25)
     ax_map = fig.add_subplot(grid[:, 0])
-    blues = agent_blues(n)
+    colors = agent_colors(n)
     images = []
     for i in range(n):
         ax = fig.add_subplot(grid[i, 1])
@@ -86,9 +86,9 @@ def _layout(view: EpisodeView, rgb_shape: tuple[int, int]):
         ax.set_xticks([])
         ax.set_yticks([])
         for spine in ax.spines.values():
-            spine.set_color(blues[i])
+            spine.set_color(colors[i])
             spine.set_linewidth(3.0)
-        ax.set_title(f"agent {i} view", fontsize=8, color=blues[i], pad=2)
+        ax.set_title(f"agent {i} view", fontsize=8, color=colors[i], pad=2)
     return fig, ax_map, images
 
 
@@ -116,9 +116,9 @@ def episode_gif(view: EpisodeView, *, renderer: str = "auto", max_frames: int = 
         fig, ax, images = _layout(view, first_rgb.shape[1:3])
         draw_background(ax, view)
         lines = draw_walked(ax, view)
-        blues = agent_blues(view.episode.num_agents)
-        heads = [ax.plot([], [], color=blues[i], linewidth=2.5, zorder=8)[0] for i in range(len(lines))]
-        dots = [ax.plot([], [], "o", color=blues[i], markeredgecolor="white", markersize=6, zorder=8)[0]
+        colors = agent_colors(view.episode.num_agents)
+        heads = [ax.plot([], [], color=colors[i], linewidth=2.5, zorder=8)[0] for i in range(len(lines))]
+        dots = [ax.plot([], [], "o", color=colors[i], markeredgecolor="white", markersize=6, zorder=8)[0]
                 for i in range(len(lines))]
         fig.suptitle(episode_title(view, note=False), fontsize=9)
         size = 0.04 * max(np.diff(ax.get_xlim())[0], np.diff(ax.get_ylim())[0])

@@ -1,8 +1,10 @@
 """Top-down picture of an evaluated episode, as in the MAIN paper's Fig. 6.
 
-Yellow circles: the agents' starts. Red flags: the targets. Green: shortest paths start -> target. Blue, one
-shade per agent: the paths walked. Red crosses: where an agent that failed stopped. Grey: navigable cells.
-In comm mode, a timeline under the map shows who talked when (`talk.py`).
+Each agent has its own colour from a qualitative palette (`agent_colors`): its walked path (solid), its own
+shortest path to its target's success region (dashed) and, individual-target, that target's success region
+(tinted cells; shared-target: one region in red). Yellow circles: the starts. Red flags: the targets. Red crosses:
+where an agent that failed stopped. Grey: navigable cells. Without a navmesh the success region is drawn as a
+circle of the task's success distance. In comm mode, a timeline under the map shows who talked when (`talk.py`).
 """
 
 from __future__ import annotations
@@ -14,20 +16,34 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib import colors as mcolors  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Circle, Patch  # noqa: E402
 
 from .episode_view import EpisodeView  # noqa: E402
 
 START_YELLOW = "#ffd400"
 TARGET_RED = "#e00000"
-SHORTEST_GREEN = "#2ca02c"
 FAILED_RED = "#d00000"
+#: Agent colours: a qualitative palette without the red, yellow and green of the targets, starts and crosses.
+AGENT_PALETTE = ("#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#7f7f7f", "#bcbd22")
+REGION_ALPHA = 0.35
 
 
-def agent_blues(n: int) -> list[tuple]:
-    """One shade of blue per agent, dark to light."""
-    cmap = plt.get_cmap("Blues")
-    return [cmap(v) for v in np.linspace(0.95, 0.5, max(n, 1))][:n]
+def agent_colors(n: int) -> list[str]:
+    """One distinct colour per agent (the palette repeats after eight agents)."""
+    return [AGENT_PALETTE[i % len(AGENT_PALETTE)] for i in range(n)]
+
+
+def is_shared(view: EpisodeView) -> bool:
+    """Whether the agents share one target (shared-target task, or every target the same point)."""
+    ep = view.episode
+    return ep.task == "shared" or bool(np.allclose(ep.target_positions, ep.target_positions[0]))
+
+
+def region_colors(view: EpisodeView) -> list[str]:
+    """The colour of each drawn target's success region: red for the shared target, else the agent's colour."""
+    return [TARGET_RED] if is_shared(view) else agent_colors(view.episode.num_agents)
 
 
 def episode_floors(view: EpisodeView) -> list[int]:
@@ -96,9 +112,46 @@ def _flag(ax, x: float, y: float, size: float, label: str | None = None) -> None
         ax.text(x + 0.75 * size, y + 0.8 * size, label, fontsize=7, color="#7f0000", zorder=7)
 
 
+def _region_cells(view: EpisodeView, k: int, floor: int | None) -> np.ndarray | None:
+    """Cell indices of target k's stored success region (on `floor`), or None without a navmesh or region."""
+    from ..episodes.goals import decode_cells
+
+    nav, regions = view.navmesh, view.episode.target_regions
+    if nav is None or k >= len(regions) or len(regions[k]) == 0:
+        return None
+    cells = decode_cells(regions[k])
+    cells = cells[(cells >= 0) & (cells < len(nav.cells()))]
+    if floor is not None and len(getattr(nav, "floors", ())) > 1:
+        cells = cells[nav.cell_floor()[cells] == floor]
+    return cells
+
+
+def draw_regions(ax, view: EpisodeView, floor: int | None = None) -> None:
+    """Each target's success region: its stored navmesh cells tinted, or without them a circle of the task's
+    success distance around the target."""
+    ep = view.episode
+    targets = ep.target_positions[:1] if is_shared(view) else ep.target_positions
+    colors = region_colors(view)
+    here = _on_floor(view, targets, floor)
+    radius = float(view.task_rules.get("success_distance", 1.0) or 1.0)
+    for k, t in enumerate(targets):
+        cells = _region_cells(view, k, floor)
+        if cells is None:
+            if here[k]:
+                ax.add_patch(Circle((t[0], t[1]), radius, facecolor=mcolors.to_rgba(colors[k], REGION_ALPHA / 2),
+                                    edgecolor=colors[k], linestyle="--", linewidth=1.2, zorder=1))
+            continue
+        x0, y0, cs, nx, ny = view.navmesh.grid_shape()
+        ix, iy = view.navmesh.cell_indices()
+        img = np.zeros((ny, nx, 4), dtype=np.float32)
+        img[iy[cells], ix[cells]] = mcolors.to_rgba(colors[k], REGION_ALPHA)
+        ax.imshow(img, origin="lower", extent=(x0, x0 + nx * cs, y0, y0 + ny * cs), interpolation="nearest",
+                  zorder=1)
+
+
 def draw_background(ax, view: EpisodeView, floor: int | None = None) -> None:
-    """Everything of the picture that does not move: navigable cells, shortest paths, targets, starts (those on
-    `floor` only, when given)."""
+    """Everything of the picture that does not move: navigable cells, success regions, each agent's shortest
+    path, targets, starts (those on `floor` only, when given)."""
     ep = view.episode
     x0, x1, y0, y1 = view_bounds(view)
     occ = occupancy(view, floor)
@@ -106,12 +159,15 @@ def draw_background(ax, view: EpisodeView, floor: int | None = None) -> None:
         img, extent = occ
         ax.imshow(img, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=3.5, interpolation="nearest",
                   zorder=0)
+    draw_regions(ax, view, floor)
     size = 0.05 * max(x1 - x0, y1 - y0)
-    for path in view.shortest_paths:
+    colors = agent_colors(ep.num_agents)
+    for i, path in enumerate(view.shortest_paths):
         if path is not None:
             path = _masked(view, path, floor)
-            ax.plot(path[:, 0], path[:, 1], color=SHORTEST_GREEN, linewidth=2.2, alpha=0.85, zorder=2)
-    shared = ep.task == "shared" or np.allclose(ep.target_positions, ep.target_positions[0])
+            ax.plot(path[:, 0], path[:, 1], color=colors[i], linewidth=1.8, linestyle=(0, (4, 2)), alpha=0.95,
+                    zorder=2)
+    shared = is_shared(view)
     targets = ep.target_positions[:1] if shared else ep.target_positions
     target_here = _on_floor(view, targets, floor)
     for k, t in enumerate(targets):
@@ -133,11 +189,11 @@ def draw_background(ax, view: EpisodeView, floor: int | None = None) -> None:
 def draw_walked(ax, view: EpisodeView, floor: int | None = None) -> list:
     """One line per agent for its walked path (full length, or its part on `floor`); returns the Line2D
     objects (agent order)."""
-    blues = agent_blues(view.episode.num_agents)
+    colors = agent_colors(view.episode.num_agents)
     lines = []
     for i, walked in enumerate(view.paths_walked):
         walked = _masked(view, walked, floor)
-        (line,) = ax.plot(walked[:, 0], walked[:, 1], color=blues[i], linewidth=2.0, zorder=3)
+        (line,) = ax.plot(walked[:, 0], walked[:, 1], color=colors[i], linewidth=2.0, zorder=3)
         lines.append(line)
     return lines
 
@@ -165,15 +221,21 @@ def floor_title(view: EpisodeView, floor: int) -> str:
     return f"floor {floor} (z = {z + 0.0 if abs(z) >= 0.005 else 0.0:.2f} m)"
 
 
-def legend_handles(n: int) -> list[Line2D]:
-    """Legend entries of the picture's symbols."""
-    blues = agent_blues(n)
+def legend_handles(view: EpisodeView) -> list:
+    """Legend entries of the picture's symbols: starts, targets, success regions, each agent's walked and
+    shortest path, failures."""
+    n = view.episode.num_agents
+    colors = agent_colors(n)
+    region = "success region" if is_shared(view) else "success region (agent's colour)"
+    region_color = region_colors(view)[0]
     return [
         Line2D([], [], marker="o", linestyle="", markerfacecolor=START_YELLOW, markeredgecolor="black",
                markersize=8, label="start"),
         Line2D([], [], marker=">", linestyle="", color=TARGET_RED, markersize=8, label="target"),
-        Line2D([], [], color=SHORTEST_GREEN, linewidth=2.2, label="shortest path"),
-        *[Line2D([], [], color=blues[i], linewidth=2.0, label=f"agent {i} walked") for i in range(n)],
+        Patch(facecolor=mcolors.to_rgba(region_color, REGION_ALPHA), edgecolor="none", label=region),
+        *[h for i in range(n) for h in (
+            Line2D([], [], color=colors[i], linewidth=2.0, label=f"agent {i} walked"),
+            Line2D([], [], color=colors[i], linewidth=1.8, linestyle=(0, (4, 2)), label=f"agent {i} shortest path"))],
         Line2D([], [], marker="x", linestyle="", color=FAILED_RED, markersize=9, markeredgewidth=2.4,
                label="failed agent stopped"),
     ]
@@ -219,10 +281,10 @@ def episode_figure(view: EpisodeView):
         start = int(view.episode.start_floors[0])
         main = axes[floors.index(start)] if start in floors else axes[0]
         last = axes[-1]
-    last.legend(handles=legend_handles(view.episode.num_agents), fontsize=7, loc="upper left",
+    last.legend(handles=legend_handles(view), fontsize=7, loc="upper left",
                 bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     if talk:
-        draw_timeline(fig.add_subplot(grid[1, :]), view, agent_blues(view.episode.num_agents))
+        draw_timeline(fig.add_subplot(grid[1, :]), view, agent_colors(view.episode.num_agents))
     fig.tight_layout()
     return fig, main
 

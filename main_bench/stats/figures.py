@@ -15,6 +15,9 @@ import pandas as pd  # noqa: E402
 from .data import episode_travel  # noqa: E402
 
 TASK_COLORS = {"shared": "#4c72b0", "individual": "#dd8452"}
+SCENE_DISTANCE_TITLE = "Mean geodesic start-to-target distance per scene (m)"
+#: Ticks of the ratio histogram's log axis.
+RATIO_TICKS = (1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0, 100.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,11 +73,12 @@ def distance_histograms(frame: pd.DataFrame, bin_m: float = 1.0) -> StatsFigure:
 
 
 def scene_lengths(frame: pd.DataFrame) -> StatsFigure:
-    """MAIN Fig. 3a: the average geodesic length of episodes per scene (mean over the episode's agents)."""
+    """MAIN Fig. 3a: per scene, the mean geodesic start-to-target distance of its episodes (an episode's value is
+    the mean over its agents), in metres. Not the episode length in steps that the leaderboard shows."""
     ep = episode_travel(frame)
     table = (ep.groupby(["scene_id", "task"])["mean_geodesic"].agg(["count", "mean", "std"]).reset_index()
-             .rename(columns={"count": "episodes", "mean": "mean_length_m", "std": "std_length_m"}))
-    table["std_length_m"] = table["std_length_m"].fillna(0.0)
+             .rename(columns={"count": "episodes", "mean": "mean_geodesic_m", "std": "std_geodesic_m"}))
+    table["std_geodesic_m"] = table["std_geodesic_m"].fillna(0.0)
     scenes = sorted(table["scene_id"].unique())
     tasks = sorted(table["task"].unique())
     width = 0.8 / len(tasks)
@@ -82,17 +86,18 @@ def scene_lengths(frame: pd.DataFrame) -> StatsFigure:
     x = np.arange(len(scenes))
     for k, task in enumerate(tasks):
         t = table[table["task"] == task].set_index("scene_id").reindex(scenes)
-        ax.bar(x + (k - (len(tasks) - 1) / 2) * width, t["mean_length_m"], width, yerr=t["std_length_m"],
+        ax.bar(x + (k - (len(tasks) - 1) / 2) * width, t["mean_geodesic_m"], width, yerr=t["std_geodesic_m"],
                capsize=2, color=_color(task), label=f"{task}-target")
     ax.set_xticks(x, scenes, rotation=40, ha="right", fontsize=8)
-    ax.set_ylabel("mean geodesic length (m) ± std")
-    ax.set_title("Average episode length per scene", fontsize=10)
+    ax.set_ylabel("geodesic start → target (m), mean ± std")
+    ax.set_title(SCENE_DISTANCE_TITLE, fontsize=10)
     ax.legend(fontsize=8)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
-    return StatsFigure("episode_length_per_scene",
-                       "Average geodesic length of episodes per scene (episode length: mean over its agents of "
-                       "the start-to-target geodesic distance), error bars one standard deviation (MAIN Fig. 3a).",
+    return StatsFigure("geodesic_distance_per_scene",
+                       f"{SCENE_DISTANCE_TITLE}: an episode's value is the mean over its agents of the geodesic "
+                       "start-to-target distance; error bars one standard deviation over the scene's episodes "
+                       "(MAIN Fig. 3a; not the episode length in steps that the leaderboard reports).",
                        png_bytes(fig), table)
 
 
@@ -130,13 +135,22 @@ def travel_vs_agents(frame: pd.DataFrame, seed: int) -> StatsFigure:
                        "intervals (MAIN Fig. 3b).", png_bytes(fig), table)
 
 
-def ratio_distribution(frame: pd.DataFrame, bin_width: float = 0.05) -> StatsFigure:
-    """Distribution of the geodesic/Euclidean distance ratio of every agent, per task."""
+def ratio_edges(ratios: np.ndarray, bins: int = 40) -> np.ndarray:
+    """Log-spaced bin edges from min(1, smallest ratio) to just above the largest ratio: every value has a bin,
+    the long tail included, and the crowd near 1 keeps fine bins."""
+    lo = min(1.0, float(np.min(ratios)))
+    hi = max(float(np.max(ratios)), lo * 1.05) * (1 + 1e-9)
+    return np.geomspace(lo, hi, bins + 1)
+
+
+def ratio_distribution(frame: pd.DataFrame, bins: int = 40) -> StatsFigure:
+    """Distribution of the geodesic/Euclidean distance ratio of every agent, per task, on a log x axis (the tail
+    runs to tens on some scenes)."""
+    from matplotlib.ticker import FixedLocator, NullFormatter
+
     ratio = frame["geodesic"] / frame["euclidean"].where(frame["euclidean"] > 0)
     data = frame.assign(ratio=ratio).dropna(subset=["ratio"])
-    top = max(1.0 + bin_width, float(np.ceil(data["ratio"].quantile(0.995) / bin_width) * bin_width))
-    edges = np.arange(1.0, top + bin_width / 2, bin_width)
-    edges = np.concatenate([[min(1.0, float(data["ratio"].min()))], edges[1:], [np.inf]])
+    edges = ratio_edges(data["ratio"].to_numpy(), bins)
     rows = []
     fig, ax = plt.subplots(figsize=(6.0, 3.6))
     for task in sorted(data["task"].unique()):
@@ -144,11 +158,16 @@ def ratio_distribution(frame: pd.DataFrame, bin_width: float = 0.05) -> StatsFig
         hist, _ = np.histogram(vals, edges)
         for lo, hi, k in zip(edges[:-1], edges[1:], hist, strict=True):
             rows.append({"task": task, "bin_low": lo, "bin_high": hi, "count": int(k)})
-        shown = np.clip(vals, edges[0], edges[-2] + bin_width / 2)
-        ax.hist(shown, bins=np.append(edges[:-1], edges[-2] + bin_width), histtype="step", linewidth=1.6,
-                color=_color(task), label=f"{task}-target (median {np.median(vals):.2f})")
+        ax.stairs(hist, edges, linewidth=1.6, color=_color(task),
+                  label=f"{task}-target (median {np.median(vals):.2f}, max {vals.max():.1f})")
     ax.axvline(1.1, color="grey", linestyle=":", label="1.1 (PointNav thinning threshold)")
-    ax.set_xlabel("geodesic / Euclidean distance (last bin: everything above)")
+    ax.set_xscale("log")
+    ax.set_xlim(edges[0], edges[-1])
+    ticks = [t for t in RATIO_TICKS if edges[0] <= t <= edges[-1]]
+    ax.xaxis.set_major_locator(FixedLocator(ticks))
+    ax.set_xticklabels([f"{t:g}" for t in ticks])
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("geodesic / Euclidean distance (log scale)")
     ax.set_ylabel("agents")
     ax.set_title("Geodesic to Euclidean distance ratio", fontsize=10)
     ax.legend(fontsize=8)
@@ -156,4 +175,5 @@ def ratio_distribution(frame: pd.DataFrame, bin_width: float = 0.05) -> StatsFig
     fig.tight_layout()
     return StatsFigure("geodesic_euclidean_ratio",
                        "Ratio of geodesic to straight-line distance, start to target, for every agent "
-                       "(1 = straight walk; higher = more detours).", png_bytes(fig), pd.DataFrame(rows))
+                       f"(1 = straight walk; higher = more detours), {bins} log-spaced bins covering every agent.",
+                       png_bytes(fig), pd.DataFrame(rows))

@@ -9,14 +9,16 @@ from typing import Any
 from .. import __version__
 from ..errors import DatasetError
 from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from ..portable import manifest_hash, portable_path, project_root
 from .compare import episode_length_vs_published
 from .data import agent_frame, episode_travel
 from .figures import StatsFigure, distance_histograms, ratio_distribution, scene_lengths, travel_vs_agents
 from .maps import density_figure, scene_map
 from .rooms import targets_by_room
 
-#: Version of stats.json.
-STATS_SCHEMA_VERSION = 1
+#: Version of stats.json. 2: Fig. 3a's file is geodesic_distance_per_scene (columns mean_geodesic_m, std_geodesic_m);
+#: `dataset` relative to the project root (no absolute path) and `manifest_hash` beside it.
+STATS_SCHEMA_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -59,7 +61,8 @@ def _summary(frame, dataset: Path, maps: dict[str, str]) -> dict[str, Any]:
                        "mean_geodesic_m": float(agents["geodesic"].mean()),
                        "mean_travel_m": float(g["travel"].mean()),
                        "mean_ratio": float((agents["geodesic"] / agents["euclidean"]).mean())})
-    return {"schema_version": STATS_SCHEMA_VERSION, "toolkit_version": __version__, "dataset": str(dataset),
+    return {"schema_version": STATS_SCHEMA_VERSION, "toolkit_version": __version__,
+            "dataset": portable_path(dataset, project_root()), "manifest_hash": manifest_hash(dataset),
             "episodes": int(ep.shape[0]), "agent_starts": int(frame.shape[0]),
             "scenes": sorted(frame["scene_id"].unique().tolist()), "groups": groups, "maps": maps}
 
@@ -67,11 +70,11 @@ def _summary(frame, dataset: Path, maps: dict[str, str]) -> dict[str, Any]:
 def compute_stats(dataset: str | Path, out_dir: str | Path, settings: StatsSettings | None = None) -> StatsReport:
     """Draw every dataset figure of `dataset` into `out_dir` (PNG + CSV each, plus stats.json), atomically.
 
-    Figures: geodesic distance histograms by task and agent count; average episode length per scene (MAIN
-    Fig. 3a), alone and beside other data sets' published figures; distance to travel against the number of
-    agents (Fig. 3b); geodesic/Euclidean ratio; object-goal targets by room type where the scenes' sidecars know
-    rooms; start and target density per scene (one row of panels per floor) over its navigable cells when the
-    scene's navmesh can be built.
+    Figures: geodesic distance histograms by task and agent count; mean geodesic start-to-target distance per
+    scene (MAIN Fig. 3a), alone and beside other data sets' published figures; distance to travel against the
+    number of agents (Fig. 3b); geodesic/Euclidean ratio (log axis); object-goal targets by room type where the
+    scenes' sidecars know rooms; start and target density per scene (one row of panels per floor) over its
+    navigable cells when the scene's navmesh can be built.
     """
     settings = settings or StatsSettings()
     dataset = Path(dataset)

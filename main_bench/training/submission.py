@@ -3,7 +3,8 @@
 Flows in: the trained `Net` and the run's settings. Flows out, in one folder: `policy.py` (`make_policy(root,
 seed)` giving one agent's `AgentPolicy`), `model.py` and `obs.py` (copies of this package's self-contained model
 and observation packing, so the policy process needs only numpy and torch), `weights.pt` (model config and
-state_dict) and `metadata.json` (the exact command, algorithm, evaluation mode, agent-steps, updates, wall time).
+state_dict) and `metadata.json` (the exact command, algorithm, evaluation mode, agent-steps, updates, wall time,
+the training data's manifest hash; paths relative to the project root, never the machine's absolute layout).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from ..portable import manifest_hash, portable_command, portable_path, project_root
 
 METADATA_VERSION = 1
 #: model.py's import of its observation packing, as written in the package and in a submission's copy.
@@ -58,10 +60,15 @@ def write_submission(folder: str | Path, net: Any, settings: Any, command: str, 
     buffer = io.BytesIO()
     torch.save(state, buffer)
     atomic_write_bytes(folder / WEIGHTS, buffer.getvalue())
+    root = project_root()
+    plain = settings.to_dict()
     atomic_write_json(folder / "metadata.json", {
-        "schema_version": METADATA_VERSION, "command": command, "algo": settings.algo, "mode": settings.mode,
-        "agent_steps": int(agent_steps), "updates": int(updates), "wall_seconds": round(float(wall_seconds), 1),
-        "model": net.config.to_dict(), "settings": settings.to_dict(),
+        "schema_version": METADATA_VERSION, "command": portable_command(command, root), "algo": settings.algo,
+        "mode": settings.mode, "agent_steps": int(agent_steps), "updates": int(updates),
+        "wall_seconds": round(float(wall_seconds), 1), "model": net.config.to_dict(),
+        "settings": {**plain, "episodes": portable_path(settings.episodes, root),
+                     "cache_dir": None if plain.get("cache_dir") is None else portable_path(plain["cache_dir"], root)},
+        "episodes_manifest_hash": manifest_hash(settings.episodes),
     })
     return folder
 

@@ -48,7 +48,7 @@ def with_probe(page: Path, out: Path) -> Path:
 def report(tmp_path_factory, episodes_dir, three_results):
     base = tmp_path_factory.mktemp("browser")
     evil = make_results(base / "evil", episodes_dir, EVIL, 0.6, seed=4, description="<b>bold?</b> & co")
-    settings = LeaderboardSettings(tables=TableSettings(n_resamples=200))
+    settings = LeaderboardSettings(pictures=0, tables=TableSettings(n_resamples=200))
     return build_leaderboard([*three_results, evil], base / "lb", settings)
 
 
@@ -83,3 +83,50 @@ def test_hostile_submission_name_shows_as_text(tmp_path, report):
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in dom
     assert "&lt;b&gt;bold?&lt;/b&gt; &amp; co" in dom
     assert dom.count("<script") == 1  # only the probe
+    run_page = next(p for p in report.run_pages if "script" in p.name)
+    res = chromium(tmp_path, "--dump-dom", with_probe(run_page, tmp_path / "probe_run.html").as_uri())
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in res.stdout and res.stdout.count("<script") == 1
+
+
+# Appended to a copy of a page: after layout, records the page's width and which table wrappers scroll.
+WIDTH_PROBE = ("<script>(function(){var h=document.documentElement,over=[];"
+               "document.querySelectorAll('div.table').forEach(function(d,i){if(d.scrollWidth>d.clientWidth+1)"
+               "over.push(i)});h.setAttribute('data-page-width',String(h.scrollWidth));"
+               "h.setAttribute('data-view-width',String(h.clientWidth));"
+               "h.setAttribute('data-overflow',over.join(','));})();</script>")
+
+
+def widths(tmp_path: Path, page: Path, width: int) -> tuple[int, int, str]:
+    """(page scroll width, viewport width, indices of tables wider than their box) at a window `width` px wide."""
+    probe = tmp_path / f"width_{page.name}"
+    probe.write_text(page.read_text().replace("</body>", WIDTH_PROBE + "</body>"))
+    res = chromium(tmp_path, "--dump-dom", f"--window-size={width},1000", probe.as_uri())
+    tag = re.search(r"<html[^>]*>", res.stdout).group(0)
+    get = dict(re.findall(r'data-([a-z-]+)="([^"]*)"', tag))
+    return int(get["page-width"]), int(get["view-width"]), get["overflow"]
+
+
+#: The paper's Table 2 rows (issue 36): seven algorithms and random, teams of 2 and 3.
+TABLE2_METHODS = ("Multi-PPO (silent)", "IPPO (silent)", "MAPPO (silent)", "Comm-S (comm)", "Comm-V (comm)",
+                  "Comm-RM (comm)", "Comm-RV (comm)", "random (silent)")
+
+
+def test_table2_shaped_board_fits_1400_px(tmp_path, episodes_dir):
+    runs = [make_results(tmp_path / f"r{k}", episodes_dir, name, 0.1 + 0.1 * k, seed=k)
+            for k, name in enumerate(TABLE2_METHODS)]
+    report = build_leaderboard(runs, tmp_path / "lb", LeaderboardSettings(plots=False, pictures=0,
+                                                                          tables=TableSettings(n_resamples=100)))
+    page = report.index_html.read_text()
+    assert page.count("Table 2 shape") == 2 and all(escape_name(n) in page for n in TABLE2_METHODS)
+    for shown in (report.index_html, report.run_pages[0]):
+        page_width, view, over = widths(tmp_path, shown, 1400)
+        assert page_width <= view and over == "", (shown.name, page_width, view, over)
+    # The check sees an overflow where there is one: the same board in a 900 px window.
+    page_width, view, over = widths(tmp_path, report.index_html, 900)
+    assert over != ""
+
+
+def escape_name(name: str) -> str:
+    from html import escape
+
+    return escape(name)

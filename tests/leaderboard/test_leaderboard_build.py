@@ -23,7 +23,7 @@ from main_bench.leaderboard.plots import DISTANCE_EDGES
 episodes_dir = lb_fixtures.episodes_dir
 three_results = lb_fixtures.three_results
 METRICS = ("success", "spl", "soft_spl", "distance_to_goal", "steps", "collisions")
-FAST = LeaderboardSettings(plots=False, tables=TableSettings(n_resamples=200))
+FAST = LeaderboardSettings(plots=False, pictures=0, tables=TableSettings(n_resamples=200))
 
 
 def team_rows(results_dir: Path) -> pd.DataFrame:
@@ -68,9 +68,10 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
             for m in METRICS:
                 assert values[m] == pytest.approx(expected[key][m], abs=1e-6), (key, m)
                 assert values[f"{m}_ci_low"] <= values[m] + 1e-12 <= values[f"{m}_ci_high"] + 2e-12
-            # The same numbers, as printed, in both tables (percent for rates).
-            spl_txt = f"{100 * expected[key]['spl']:.1f} [{100 * values['spl_ci_low']:.1f}, "
+            # The same numbers, as printed, in both tables (fractions for rates: 3 decimals, bounds too).
+            spl_txt = f"{expected[key]['spl']:.3f} [{values['spl_ci_low']:.3f}, {values['spl_ci_high']:.3f}]"
             assert spl_txt in readme
+            assert spl_txt.replace(" [", '<span class="ci">[', 1) in page
             assert f"{expected[key]['distance_to_goal']:.2f}" in page
     # Ranked by team SPL within each track.
     for track in section["tracks"]:
@@ -90,10 +91,10 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
     assert [s["submission_metadata"]["baseline"] for s in section["submissions"]] == [False, True, True]
     assert readme.count("*(baseline)*") >= 2 and 'class="badge">baseline' in page
     assert "Table 2 shape: val · shared-target" in readme and "2 agents: Length" in readme
-    # Table 2 (MAIN paper shape): per agent count Length (steps), Distance (m), Success rate (%), SPL (%).
+    # Table 2 (MAIN paper shape): per agent count Length (steps), Distance (m), Success rate, SPL (fractions).
     for task in ("shared", "individual"):
         block = readme.split(f"### Table 2 shape: val · {task}-target")[1].split("###")[0]
-        assert "| Method | 2 agents: Length | 2 agents: Distance | 2 agents: Success rate (%) | 2 agents: SPL (%) " \
+        assert "| Method | 2 agents: Length | 2 agents: Distance | 2 agents: Success rate | 2 agents: SPL " \
                "| 3 agents: Length |" in block
         for results_dir, name in zip(three_results, ("Strong method", "Greedy baseline"), strict=False):
             row = next(line for line in block.splitlines() if line.startswith(f"| {name}"))
@@ -101,8 +102,8 @@ def test_json_and_tables_equal_recomputed_means(tmp_path, three_results, cli):
             means = team_means(results_dir)
             want = [txt for n in (2, 3) for txt in (f"{means[f'val/{task}/{n}']['steps']:.1f}",
                                                     f"{means[f'val/{task}/{n}']['distance_to_goal']:.2f}",
-                                                    f"{100 * means[f'val/{task}/{n}']['success']:.1f}",
-                                                    f"{100 * means[f'val/{task}/{n}']['spl']:.1f}")]
+                                                    f"{means[f'val/{task}/{n}']['success']:.3f}",
+                                                    f"{means[f'val/{task}/{n}']['spl']:.3f}")]
             assert cells == want, (task, name)
     assert len(list((tmp_path / "lb" / "plots").glob("*.png"))) == len(payload["plots"]) == 5
     check_plots(tmp_path / "lb", three_results, page)
@@ -201,7 +202,7 @@ def test_hostile_names_are_escaped(tmp_path, episodes_dir):
 def test_dollar_signs_in_names_are_text_not_tex(tmp_path, episodes_dir):
     name = r"Nav $\frac$ v2"
     r = make_results(tmp_path / "tex", episodes_dir, name, 0.5)
-    report = build_leaderboard([r], tmp_path / "lb", LeaderboardSettings(tables=TableSettings(n_resamples=200)))
+    report = build_leaderboard([r], tmp_path / "lb", LeaderboardSettings(pictures=0, tables=TableSettings(n_resamples=200)))
     assert len(report.figure_paths) == 5 and all(p.stat().st_size > 0 for p in report.figure_paths)
     assert name in set(pd.read_csv(tmp_path / "lb" / "plots" / "section0_methods.csv")["method"])
 
@@ -249,7 +250,7 @@ def _with_rules(results: Path, success: float, steps: int) -> Path:
 def test_each_section_shows_its_task_rules(tmp_path, episodes_dir):
     a = _with_rules(make_results(tmp_path / "a", episodes_dir, "Method A", 0.6, manifest_hash="a" * 64), 1.0, 500)
     b = _with_rules(make_results(tmp_path / "b", episodes_dir, "Method B", 0.6, manifest_hash="b" * 64), 1.5, 300)
-    report = build_leaderboard([a, b], tmp_path / "lb", LeaderboardSettings(allow_mixed=True, plots=False,
+    report = build_leaderboard([a, b], tmp_path / "lb", LeaderboardSettings(allow_mixed=True, plots=False, pictures=0,
                                                                             tables=TableSettings(n_resamples=200)))
     page, readme = report.index_html.read_text(), report.readme_md.read_text()
     for rules in ("success within 1 m; at most 500 steps per agent", "success within 1.5 m; at most 300 steps"):

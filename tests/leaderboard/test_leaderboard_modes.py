@@ -12,7 +12,7 @@ from lb_fixtures import make_results
 from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
 
 episodes_dir = lb_fixtures.episodes_dir
-FAST = LeaderboardSettings(plots=False, tables=TableSettings(n_resamples=200))
+FAST = LeaderboardSettings(plots=False, pictures=0, tables=TableSettings(n_resamples=200))
 
 
 def test_modes_are_sections_with_mode_and_bytes_columns(tmp_path, episodes_dir):

@@ -40,9 +40,9 @@ def test_timeline_ticks_are_the_messages_of_the_trajectory(tmp_path, episodes_di
     assert len(offsets) == len(sent)
     assert sorted(map(tuple, offsets.tolist())) == sorted(zip(sent["step"].astype(float),
                                                               sent["agent_index"].astype(float), strict=True))
-    orange = [c for c in timeline.collections if np.allclose(c.get_edgecolor()[0][:3], (0xE3 / 255, 0x6C / 255,
-                                                                                          0x0A / 255))]
-    assert len(orange) == 1 and orange[0].get_offsets().tolist() == [[2.0, 1.0]]
+    black = [c for c in timeline.collections if np.allclose(c.get_edgecolor()[0][:3], (0x1F / 255, 0x23 / 255,
+                                                                                         0x28 / 255))]
+    assert len(black) == 1 and black[0].get_offsets().tolist() == [[2.0, 1.0]]
     assert f"{len(sent)} sent, {int(sent['message_bytes'].sum())} bytes" in timeline.get_title()
     assert episode_png(view)[:4] == b"\x89PNG"
 

@@ -21,10 +21,9 @@ from main_bench.leaderboard.episode_view import load_episode_view
 from main_bench.leaderboard.video import episode_gif, frame_steps, poses_at
 from main_bench.leaderboard.visualize import (
     FAILED_RED,
-    SHORTEST_GREEN,
     START_YELLOW,
     TARGET_RED,
-    agent_blues,
+    agent_colors,
     episode_figure,
     episode_png,
 )
@@ -62,16 +61,48 @@ def _near(img: np.ndarray, px: tuple[float, float], color: str, radius: int = 3,
     return bool((np.linalg.norm(win - want, axis=-1) < tol).any())
 
 
+def tint(color: str) -> str:
+    """`color` at the success region's opacity over the grey of a navigable cell."""
+    from main_bench.leaderboard.visualize import REGION_ALPHA
+
+    grey = np.array(mcolors.to_rgb(plt_grey()))
+    return mcolors.to_hex(REGION_ALPHA * np.array(mcolors.to_rgb(color)) + (1 - REGION_ALPHA) * grey)
+
+
+def plt_grey() -> tuple:
+    """The grey of a navigable cell (value 1 of the map's Greys colour map, 0..3.5)."""
+    import matplotlib.pyplot as plt
+
+    return plt.get_cmap("Greys")(1 / 3.5)[:3]
+
+
+def check_distinct_palette(colors: list[str], reserved: list[np.ndarray]) -> None:
+    """Agents' colours differ from each other and from the start and target colours in hue, not only shade."""
+    rgb = [np.array(mcolors.to_rgb(c)) for c in colors]
+    hsv = [mcolors.rgb_to_hsv(c) for c in rgb]
+    for a in range(len(rgb)):
+        for b in range(a + 1, len(rgb)):
+            assert np.linalg.norm(rgb[a] - rgb[b]) > 0.35, (colors[a], colors[b])
+        assert all(np.linalg.norm(rgb[a] - r) > 0.3 for r in reserved), colors[a]
+    hues = sorted(h[0] for h in hsv[:3])
+    gaps = np.diff(hues + [hues[0] + 1.0])
+    assert (gaps > 0.08).all(), f"the first three agents' colours are shades of one hue: {colors[:3]}"
+
+
+def test_agents_have_distinct_colours_of_their_own():
+    reserved = [np.array(mcolors.to_rgb(c)) for c in (START_YELLOW, TARGET_RED, FAILED_RED)]
+    check_distinct_palette(agent_colors(4), reserved)
+    with pytest.raises(AssertionError, match="shades of one hue"):  # the check fails on three blues
+        check_distinct_palette(["#08306b", "#2171b5", "#9ecae1"], [])
+
+
 def test_png_symbols_are_where_the_files_put_them(evaluated):
     res, cache = evaluated
-    # MAIN Fig. 6 colours: yellow starts, red flags and crosses, green shortest paths, blue walked paths.
+    # MAIN Fig. 6 colours: yellow starts, red flags and crosses; one distinct colour per agent.
     rgb = {k: np.array(mcolors.to_rgb(c)) for k, c in
-           {"start": START_YELLOW, "flag": TARGET_RED, "cross": FAILED_RED, "shortest": SHORTEST_GREEN}.items()}
+           {"start": START_YELLOW, "flag": TARGET_RED, "cross": FAILED_RED}.items()}
     assert min(rgb["start"][:2]) > 0.8 and rgb["start"][2] < 0.3
     assert all(rgb[k][0] > 0.7 and max(rgb[k][1:]) < 0.2 for k in ("flag", "cross"))
-    assert rgb["shortest"][1] > 1.5 * max(rgb["shortest"][0], rgb["shortest"][2])
-    shades = [np.array(mcolors.to_rgb(c)) for c in agent_blues(3)]
-    assert all(c[2] > max(c[0], c[1]) for c in shades) and len({tuple(c) for c in shades}) == 3
     for ep_id in _episode_ids(res):
         view = load_episode_view(res, ep_id, cache_dir=cache)
         assert view.map_reason == "grey: navigable cells" and view.navmesh is not None
@@ -82,19 +113,23 @@ def test_png_symbols_are_where_the_files_put_them(evaluated):
         ep = view.episode
         # Walked paths are the trajectory file's positions; each ends where the file's last step is.
         traj = pq.read_table(res / "trajectories", filters=[("episode_id", "==", ep_id)]).to_pandas()
-        blues = agent_blues(ep.num_agents)
+        colors = agent_colors(ep.num_agents)
         for i in range(ep.num_agents):
             mine = traj[traj["agent_index"] == i].sort_values("step")
             np.testing.assert_allclose(view.paths_walked[i][-1], mine[["x", "y", "z"]].to_numpy()[-1], atol=1e-6)
             mid = view.paths_walked[i][len(view.paths_walked[i]) // 2]
-            assert _near(img, to_px(mid[:2]), mcolors.to_hex(blues[i]), radius=4), f"agent {i} path"
+            assert _near(img, to_px(mid[:2]), colors[i], radius=4), f"agent {i} path"
             assert _near(img, to_px(ep.start_positions[i][:2]), START_YELLOW, radius=5), f"agent {i} start"
             size = 0.05 * max(np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim()))
             flag = ep.target_positions[i][:2] + np.array([0.2, 0.75]) * size
             assert _near(img, to_px(flag), TARGET_RED, radius=6), f"agent {i} target flag"
             path = view.shortest_paths[i]
             assert path is not None and np.linalg.norm(path[0, :2] - ep.start_positions[i][:2]) < 0.3
-            assert sum(_near(img, to_px(p[:2]), SHORTEST_GREEN) for p in path) >= len(path) // 2
+            # Each agent's own shortest path, dashed in its colour, ends in its target's success region, which is
+            # tinted in the agent's colour around the target.
+            assert sum(_near(img, to_px(p[:2]), colors[i]) for p in path) >= len(path) // 2
+            assert _near(img, to_px(ep.target_positions[i][:2] - np.array([0.3, 0.3])), tint(colors[i]),
+                         radius=4, tol=30.0), f"agent {i} success region"
         # Random agents never call found correctly here: each failed and has a red cross where it stopped.
         assert view.failed_agents == tuple(range(ep.num_agents))
         for i in view.failed_agents:

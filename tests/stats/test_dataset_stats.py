@@ -10,6 +10,7 @@ import pytest
 from mb_testing import need
 from stats_fixtures import SCENES, make_dataset, read_rows
 
+from main_bench.io import sha256_file
 from main_bench.stats import StatsSettings, compute_stats
 
 
@@ -42,8 +43,13 @@ def test_histograms_and_ratio_count_every_agent(dataset, report):
         vals = [a / b for r in rows if r["task"] == task
                 for a, b in zip(r["geodesic_distances"], r["euclidean_distances"], strict=True)]
         assert g["count"].sum() == len(vals)
-        above_13 = sum(v >= 1.3 - 1e-9 for v in vals)
-        assert g.loc[g["bin_low"] >= 1.3 - 1e-9, "count"].sum() == pytest.approx(above_13, abs=2)
+        # 40 log-spaced bins from min(1, smallest ratio) to the largest: every agent counted in its bin, the
+        # long tail included (no clipping: the axis is logarithmic).
+        every = [a / b for r in rows for a, b in zip(r["geodesic_distances"], r["euclidean_distances"], strict=True)]
+        edges = np.geomspace(min(1.0, min(every)), max(every) * (1 + 1e-9), 41)
+        np.testing.assert_allclose(g["bin_low"], edges[:-1], rtol=1e-5)
+        np.testing.assert_allclose(g["bin_high"], edges[1:], rtol=1e-5)
+        assert g["count"].tolist() == np.histogram(vals, edges)[0].tolist()
 
 
 def test_fig3b_travel_is_min_for_shared_and_sum_for_individual(dataset, report):
@@ -57,16 +63,19 @@ def test_fig3b_travel_is_min_for_shared_and_sum_for_individual(dataset, report):
         assert r["mean_travel_m"] == pytest.approx(expected, rel=1e-5)
         assert r["ci_low_m"] <= r["mean_travel_m"] <= r["ci_high_m"] and r["episodes"] == len(eps)
     summary = json.loads(report.summary_json.read_text())
-    assert summary["schema_version"] == 1 and summary["episodes"] == len(rows)
+    assert summary["schema_version"] == 2 and summary["episodes"] == len(rows)
+    # Published as is: the data set named by its manifest hash, its path never the machine's absolute one.
+    assert summary["manifest_hash"] == sha256_file(dataset / "manifest.json")
+    assert not summary["dataset"].startswith("/") and summary["dataset"].endswith(dataset.name)
 
 
 def test_fig3a_scene_lengths_and_density_counts(dataset, report):
     rows = read_rows(dataset)
-    lengths = _csv(report, "episode_length_per_scene")
+    lengths = _csv(report, "geodesic_distance_per_scene")
     assert set(lengths["scene_id"]) == set(SCENES)
     for _, r in lengths.iterrows():
         eps = [np.mean(x["geodesic_distances"]) for x in rows if (x["scene_id"], x["task"]) == (r["scene_id"], r["task"])]
-        assert r["mean_length_m"] == pytest.approx(np.mean(eps), rel=1e-5) and r["episodes"] == len(eps)
+        assert r["mean_geodesic_m"] == pytest.approx(np.mean(eps), rel=1e-5) and r["episodes"] == len(eps)
     for scene in SCENES:
         dens = _csv(report, "density_" + scene.replace(" ", "_"))
         starts = sum(x["agents"] for x in rows if x["scene_id"] == scene)
