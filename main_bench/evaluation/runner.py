@@ -110,22 +110,19 @@ def submission_meta(settings: EvalSettings) -> SubmissionMeta:
     else named after the spec (baselines are marked as such)."""
     meta = settings.submission
     spec = settings.agent.strip()
-    doc: dict[str, Any] = {}
+    doc = SubmissionMeta()
     folder = Path(spec.split(":", 1)[0]) if not spec.startswith("baseline:") else None
     if folder is not None and folder.is_dir() and (folder / SUBMISSION_FILE).is_file():
-        doc = read_json(folder / SUBMISSION_FILE, what="submission metadata")
-        if not isinstance(doc, dict):
+        raw = read_json(folder / SUBMISSION_FILE, what="submission metadata")
+        if not isinstance(raw, dict):
             raise SubmissionError("submission.json must be a JSON object with name, description, links",
                                   path=folder / SUBMISSION_FILE)
-    links = meta.links or tuple(doc.get("links") or ())
-    if isinstance(links, str):
-        links = (links,)
-    is_baseline = meta.baseline or doc.get("baseline") is True or spec.startswith("baseline:")
-    name = meta.name or str(doc.get("name") or "") or (spec if spec.startswith("baseline:") else Path(
+        doc = SubmissionMeta.from_json(raw, folder / SUBMISSION_FILE, SubmissionError)
+    is_baseline = meta.baseline or doc.baseline or spec.startswith("baseline:")
+    name = meta.name or doc.name or (spec if spec.startswith("baseline:") else Path(
         spec.split(":", 1)[0]).stem or spec)
-    return SubmissionMeta(name=name, description=meta.description or str(doc.get("description") or ""),
-                          links=tuple(str(v) for v in links), date=meta.date or str(doc.get("date") or ""),
-                          baseline=is_baseline)
+    return SubmissionMeta(name=name, description=meta.description or doc.description,
+                          links=meta.links or doc.links, date=meta.date or doc.date, baseline=is_baseline)
 
 
 def _check_run_file(out: Path, identity: dict[str, Any]) -> None:
