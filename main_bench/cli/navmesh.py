@@ -84,6 +84,7 @@ def build(
         "seconds": round(time.perf_counter() - start, 3),
         "up_axis": loaded.up_axis,
         "up_reason": loaded.up_reason,
+        "up_rule": loaded.up_rule,
         **nm.info(),
     }
     emit(
