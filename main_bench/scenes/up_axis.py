@@ -114,13 +114,16 @@ def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, fmt: str, path: 
     keep = area2 > 0
     tri, normals, area = tri[keep], cross[keep] / area2[keep, None], area2[keep] / 2
 
-    def has_floor(axis: Axis) -> FrameEvidence | None:
-        ev = frame_evidence(tri, normals, area, axis, metres(axis), standing=False)
-        return None if ev.floor_z is None or ev.walls_below > WALLS_BELOW_MAX else ev
+    def floor_as_given(axis: Axis) -> FrameEvidence:
+        """The frame's lowest large horizontal band, as a given --up takes it (no room to stand asked)."""
+        return frame_evidence(tri, normals, area, axis, metres(axis), standing=False)
+
+    def has_floor(ev: FrameEvidence) -> bool:
+        return ev.floor_z is not None and ev.walls_below <= WALLS_BELOW_MAX
 
     if up in ("y", "z"):
-        if has_floor(up) is None:  # type: ignore[arg-type]
-            ev = frame_evidence(tri, normals, area, up, metres(up), standing=False)  # type: ignore[arg-type]
+        ev = floor_as_given(up)  # type: ignore[arg-type]
+        if not has_floor(ev):
             raise SceneError(f"no floor with --up {up}: {ev.describe()}; check the file or its --up", path=path)
         return up, "given", "given"  # type: ignore[return-value]
     name = fmt.upper()
@@ -131,7 +134,7 @@ def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, fmt: str, path: 
         if z.ok and (not y.ok or _better_enclosed(z, y)):
             return "z", "geometry", (f"geometric test on {name}: read +Y up as glTF specifies, the file is no "
                                      f"indoor scene ({both})")
-        if y.ok or has_floor("y") is not None:
+        if y.ok or has_floor(floor_as_given("y")):
             return "y", "gltf-convention", "glTF convention: +Y up"
     if not y.ok and not z.ok:
         raise SceneError(f"no floor in either frame ({both}); a scene needs a floor under its walls, "
