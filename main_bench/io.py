@@ -168,3 +168,26 @@ def read_through_cache(entry: Path, read: Callable[[Path], T | None], make: Call
     except OSError:
         pass
     return value
+
+
+def refuse_output_over_inputs(out: str | Path, inputs: dict[str, str | Path | None], flag: str = "--out") -> None:
+    """Refuse an output path that would overwrite an input: the same path or file (a link, a hard link), or a
+    folder holding an input. `inputs`: each input's option or argument name -> its path (None, or a path that
+    does not exist, is skipped). Raises `InputError` naming the output and the input."""
+    target = Path(os.path.realpath(out))
+    for name, given in inputs.items():
+        if given is None or not os.path.lexists(given):
+            continue
+        source = Path(os.path.realpath(given))
+        same = source == target or _same_file(target, source)
+        if same or target in source.parents:
+            how = "is" if same else "holds"
+            raise InputError(f"{how} the input {name} ({given}); writing there would destroy it: give {flag} "
+                             "another path", path=out)
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):  # missing, a link loop, an unreadable path
+        return False

@@ -162,6 +162,12 @@ def register(app: typer.Typer) -> None:
         as_json: bool = JsonOption,
     ) -> None:
         """Run every stage end to end on built-in houses and say where the outputs are."""
+        import os
+
+        from ..io import refuse_output_over_inputs
+
+        if episodes is not None and os.path.realpath(episodes) != os.path.realpath(out / "episodes"):  # else: its own
+            refuse_output_over_inputs(out, {"--episodes": episodes})
         settings = DemoSettings(out=out, episodes=episodes, houses=houses, per_scene=per_scene, limit=limit,
                                 workers=workers, renderer=renderer, seed=seed)
         result = run_demo(settings, log=(lambda _m: None) if as_json else lambda m: typer.echo(m, err=True))

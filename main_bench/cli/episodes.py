@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ..io import refuse_output_over_inputs
 from .common import (
     AgentHeightOption,
     AgentRadiusOption,
@@ -95,6 +96,7 @@ def generate(
     from ..navmesh import NavMeshSettings
 
     check_up(up)
+    refuse_output_over_inputs(out, {"--splits": splits, "--navmesh": navmesh, **{f"--scenes {s}": s for s in scenes}})
     width, height = _camera_size(camera)
     settings = GenerationSettings(
         tasks=_tasks(task), agents=parse_int_list(agents, "--agents", 1, 8), per_scene=per_scene,
@@ -210,6 +212,7 @@ def export(
     from ..episodes.habitat import export_habitat
 
     _format(fmt)
+    refuse_output_over_inputs(out, {"DATASET": dataset})
     files = export_habitat(dataset, out)
     emit("episodes export", {"files": [str(f) for f in files]}, as_json,
          lambda d: "\n".join(["wrote"] + [f"  {f}" for f in d["files"]]))
@@ -228,6 +231,7 @@ def import_(
     from ..episodes.habitat import import_habitat
 
     _format(fmt)
+    refuse_output_over_inputs(out, {"SRC": src})
     path = import_habitat(src, out, overwrite=overwrite)
     m = read_manifest(path)
     emit("episodes import", {"out": str(path), "episodes": m.episodes, "manifest_hash": m.manifest_hash},

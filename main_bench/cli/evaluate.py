@@ -12,6 +12,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ..io import refuse_output_over_inputs
 from .common import JsonOption, emit, parse_int_list, stderr_is_terminal
 
 app = typer.Typer(help="Evaluate a submitted policy on an episode split (a team policy, or agent policies with --mode "
@@ -120,6 +121,8 @@ def evaluate(
     missing = [flag for flag, v in (("--episodes", episodes), ("--agent", agent), ("--out", out)) if v is None]
     if missing:
         raise InputError(f"main-bench evaluate needs {', '.join(missing)} (see main-bench evaluate --help)")
+    spec_path = None if str(agent).startswith("baseline:") else str(agent).split(":", 1)[0]
+    refuse_output_over_inputs(out, {"--episodes": episodes, "--agent": spec_path})  # type: ignore[arg-type]
     if task not in ("shared", "individual", "both"):
         raise InputError(f"--task must be shared, individual or both, got {task!r}")
     settings = EvalSettings(

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import typer
 
+from ..io import refuse_output_over_inputs
 from .common import JsonOption, emit
 
 app = typer.Typer(help="Build the leaderboard report from results directories.", rich_markup_mode=None, no_args_is_help=True)
@@ -34,6 +35,7 @@ def build(
     """Rank submissions per track (split x task x agents) by team SPL, with 95% bootstrap intervals."""
     from ..leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
 
+    refuse_output_over_inputs(out, {f"RESULTS {r}": r for r in results})
     settings = LeaderboardSettings(allow_mixed=allow_mixed, plots=plots, pictures=pictures,
                                    tables=TableSettings(seed=seed, n_resamples=resamples))
     report = build_leaderboard(list(results), out, settings)

@@ -9,6 +9,7 @@ from typing import Any
 import typer
 
 from ..errors import InputError
+from ..io import refuse_output_over_inputs
 from .common import (
     AgentHeightOption,
     AgentRadiusOption,
@@ -59,6 +60,7 @@ def build(
     from ..navmesh.shared import shared_navmesh_dir, store_shared
 
     check_up(up)
+    refuse_output_over_inputs(out, {"SCENE": scene})
     settings = NavMeshSettings(agent_radius=agent_radius, agent_height=agent_height, max_climb=max_climb,
                                max_slope=max_slope, cell_size=cell_size, cell_height=cell_height,
                                region_min_size=region_min_size)  # fmt: skip
@@ -82,6 +84,7 @@ def build(
         "seconds": round(time.perf_counter() - start, 3),
         "up_axis": loaded.up_axis,
         "up_reason": loaded.up_reason,
+        "up_rule": loaded.up_rule,
         **nm.info(),
     }
     emit(
@@ -207,6 +210,7 @@ def draw_map(
     from ..navmesh import NavMesh
     from ..navmesh.export import render_map
 
+    refuse_output_over_inputs(out, {"FILE": file})
     if out.suffix.lower() != ".png":
         raise InputError("the map is a PNG; give --out a name ending in .png", path=out)
     if (start is None) != (goal is None):
@@ -236,6 +240,7 @@ def export(
     from ..navmesh import NavMesh
     from ..navmesh.export import EXPORT_FORMATS, export_surface
 
+    refuse_output_over_inputs(out, {"FILE": file})
     if fmt not in EXPORT_FORMATS:
         raise InputError(f"--format must be one of {', '.join(EXPORT_FORMATS)}, got {fmt!r}")
     nm = NavMesh.load(file)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 
+from ..io import refuse_output_over_inputs
 from .common import JsonOption, ScaleOption, UpOption, emit
 
 app = typer.Typer(help="Inspect scenes; generate and preview built-in procedural houses.", rich_markup_mode=None, no_args_is_help=True)
@@ -101,6 +102,7 @@ def preview(
     from ..scenes import load_scene
     from ..scenes.preview import find_levels, render_preview
 
+    refuse_output_over_inputs(out, {"SCENE": scene})
     if out.suffix.lower() != ".png":
         raise InputError("the preview is a PNG; give --out a name ending in .png", path=out)
     loaded = load_scene(scene, up=up, scale=scale)  # type: ignore[arg-type]
@@ -126,6 +128,8 @@ def import_(
     from ..scenes.importers.categories import CATEGORY_TABLE_VERSION
     from .common import check_up
 
+    if out is not None:
+        refuse_output_over_inputs(out, {"SRC": src})
     done = import_scenes(fmt, src, out=out, up=check_up(up), scale=scale, overwrite=overwrite)
     payload = {"format": fmt, "src": str(src), "category_table_version": CATEGORY_TABLE_VERSION,
                "scenes": [d.summary() for d in done]}

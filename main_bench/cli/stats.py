@@ -6,6 +6,7 @@ from pathlib import Path
 
 import typer
 
+from ..io import refuse_output_over_inputs
 from .common import JsonOption, emit
 
 
@@ -26,6 +27,7 @@ def stats(
     """Dataset statistics and figures: MAIN Fig 3a/3b, distance histograms, ratio, start/target density."""
     from ..stats import StatsSettings, compute_stats
 
+    refuse_output_over_inputs(out, {"DATASET": dataset})
     report = compute_stats(dataset, out, StatsSettings(maps=maps, cache_dir=cache_dir, seed=seed))
     payload = {"out_dir": str(report.out_dir), "stats_json": str(report.summary_json),
                "files": [{"name": f.name, "png": str(f.png), "csv": str(f.csv)} for f in report.files],

@@ -11,6 +11,7 @@ from typing import Any
 
 import typer
 
+from ..io import refuse_output_over_inputs
 from ..numfmt import fraction
 from .common import JsonOption, emit
 
@@ -64,6 +65,7 @@ def run(
 ) -> None:
     """Train (or resume) one baseline; prints a live progress line, writes checkpoint.pt, curve.csv/png and
     submission/ into --out."""
+    refuse_output_over_inputs(out, {"--episodes": episodes})
     import torch
 
     from ..training.ppo import PPOSettings
@@ -144,6 +146,7 @@ def point_goals(
     its start (agent 0's for a shared target), distances recomputed."""
     from ..training.pointgoals import point_goal_dataset
 
+    refuse_output_over_inputs(out, {"SRC": src})
     log = None if as_json else lambda line: typer.echo(line, err=True)
     if log is not None:
         log(f"point goals for {src} -> {out}")
@@ -159,5 +162,6 @@ def export(
     """Write the submission of a run's last checkpoint (e.g. while it still trains, or after a crash)."""
     from ..training.submission import export_checkpoint
 
+    refuse_output_over_inputs(out, {"RUN_DIR": run_dir})
     path = export_checkpoint(run_dir, out, "main-bench " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
     emit("train export", {"out": str(path)}, as_json, lambda d: f"wrote {d['out']}")

@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ..io import refuse_output_over_inputs
 from .common import JsonOption, emit
 
 
@@ -31,6 +32,7 @@ def visualize(
     from ..io import atomic_write_bytes
     from ..leaderboard.episode_view import load_episode_view
 
+    refuse_output_over_inputs(out, {"RESULTS": results})
     if fmt is None:
         fmt = "gif" if out.suffix.lower() == ".gif" else "png"
     if fmt not in ("png", "gif"):

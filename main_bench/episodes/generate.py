@@ -2,7 +2,8 @@
 
 Resumable: every shard is written atomically and carries its own report, so a rerun with the same parameters
 skips finished shards and writes only the missing ones; the manifest is written last. A folder holding a data
-set made with other parameters is refused unless `overwrite`.
+set made with other parameters is refused unless `overwrite`; a folder left by a run that failed before finishing
+any shard (its in-progress marker, no shard) is taken over by a run with other parameters.
 """
 
 from __future__ import annotations
@@ -213,17 +214,14 @@ def _prepare_out(out: Path, ident: dict, overwrite: bool) -> None:
     for name in (MANIFEST_NAME, LOCK_NAME):
         if (out / name).is_file():
             doc = read_json(out / name, what="episode data set manifest")
-            existing = {k: doc.get(k) for k in ident}
+            existing = {k: doc.get(k) for k in ident} if isinstance(doc, dict) else {}
             break
     if existing is None:
         raise InputError("exists and is not a main-bench episode data set; choose a new or empty --out folder",
                          path=out)
-    if overwrite:
-        for child in out.iterdir():
-            if (child.name.startswith("split=") or child.name == NAVMESH_DIR) and child.is_dir():
-                shutil.rmtree(child)
-        for name in (MANIFEST_NAME, LOCK_NAME):
-            (out / name).unlink(missing_ok=True)
+    unfinished = not (out / MANIFEST_NAME).is_file() and not any(out.glob("split=*/task=*/agents=*/part-*.parquet"))
+    if overwrite or (existing != ident and unfinished):  # a run that failed before any shard: nothing to keep
+        _clear(out)
         return
     if existing != ident:
         diff = sorted(_diff(existing, ident))
@@ -231,6 +229,15 @@ def _prepare_out(out: Path, ident: dict, overwrite: bool) -> None:
                          "pass --overwrite to replace it, or choose another --out", path=out)
     for stale in [*out.glob("split=*/task=*/agents=*/.part-*"), *out.glob(f"{NAVMESH_DIR}/.*.tmp")]:
         stale.unlink()  # temporary files of a killed run
+
+
+def _clear(out: Path) -> None:
+    """Remove what generation wrote in `out` (shards, stored navmeshes, manifest, in-progress marker)."""
+    for child in out.iterdir():
+        if (child.name.startswith("split=") or child.name == NAVMESH_DIR) and child.is_dir():
+            shutil.rmtree(child)
+    for name in (MANIFEST_NAME, LOCK_NAME):
+        (out / name).unlink(missing_ok=True)
 
 
 def _diff(a: Any, b: Any, prefix: str = "") -> list[str]:

@@ -4,11 +4,13 @@ Steps: read the data set's manifest; list its tracks (`split/task/agents`) for t
 episodes into fixed chunks; skip the chunks a previous run of the same evaluation finished; run the rest
 (in this process, on local worker processes, or on Ray); then compute `summary.json` from every record and
 write it last. A results directory belongs to one evaluation: `run.json` records its identity and a different
-evaluation into the same directory is refused (nothing is overwritten).
+evaluation into the same directory is refused (nothing is overwritten), unless the directory holds no finished
+chunk (a run that failed at once): then the new evaluation takes it over.
 """
 
 from __future__ import annotations
 
+import shutil
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -18,12 +20,13 @@ from .. import __version__
 from ..errors import DatasetError, ResultsError, SubmissionError
 from ..io import atomic_write_json, folder_lock, read_json
 from .baselines import privileged_baseline
-from .ledger import remove_unfinished_writes, verified_files
+from .ledger import PART_KINDS, remove_unfinished_writes, verified_files
 from .run.chunks import Chunk, make_chunks
 from .scoring.task_rules import rules_json
 from .settings import EvalSettings, SubmissionMeta
 
 RUN_FILE = "run.json"
+LEDGER_DIR = "ledger"  # where `ledger.write_entry` records finished chunks
 SUBMISSION_FILE = "submission.json"
 
 
@@ -107,40 +110,49 @@ def submission_meta(settings: EvalSettings) -> SubmissionMeta:
     else named after the spec (baselines are marked as such)."""
     meta = settings.submission
     spec = settings.agent.strip()
-    doc: dict[str, Any] = {}
+    doc = SubmissionMeta()
     folder = Path(spec.split(":", 1)[0]) if not spec.startswith("baseline:") else None
     if folder is not None and folder.is_dir() and (folder / SUBMISSION_FILE).is_file():
-        doc = read_json(folder / SUBMISSION_FILE, what="submission metadata")
-        if not isinstance(doc, dict):
+        raw = read_json(folder / SUBMISSION_FILE, what="submission metadata")
+        if not isinstance(raw, dict):
             raise SubmissionError("submission.json must be a JSON object with name, description, links",
                                   path=folder / SUBMISSION_FILE)
-    links = meta.links or tuple(doc.get("links") or ())
-    if isinstance(links, str):
-        links = (links,)
-    is_baseline = meta.baseline or doc.get("baseline") is True or spec.startswith("baseline:")
-    name = meta.name or str(doc.get("name") or "") or (spec if spec.startswith("baseline:") else Path(
+        doc = SubmissionMeta.from_json(raw, folder / SUBMISSION_FILE, SubmissionError)
+    is_baseline = meta.baseline or doc.baseline or spec.startswith("baseline:")
+    name = meta.name or doc.name or (spec if spec.startswith("baseline:") else Path(
         spec.split(":", 1)[0]).stem or spec)
-    return SubmissionMeta(name=name, description=meta.description or str(doc.get("description") or ""),
-                          links=tuple(str(v) for v in links), date=meta.date or str(doc.get("date") or ""),
-                          baseline=is_baseline)
+    return SubmissionMeta(name=name, description=meta.description or doc.description,
+                          links=meta.links or doc.links, date=meta.date or doc.date, baseline=is_baseline)
 
 
 def _check_run_file(out: Path, identity: dict[str, Any]) -> None:
     path = out / RUN_FILE
-    if out.exists() and not out.is_dir():
-        raise ResultsError("--out exists and is not a folder; give a folder for the results", path=out)
     if path.is_file():
         old = read_json(path, what="results run file")
         if not isinstance(old, dict):
             raise ResultsError("run.json is not a main-bench run file; give a new --out", path=path)
-        if old.get("identity") != identity:
+        if old.get("identity") != identity and _finished_work(out):
             diff = sorted(k for k in identity if (old.get("identity") or {}).get(k) != identity[k])
             raise ResultsError(f"holds a different evaluation (differs in {', '.join(diff)}); give a new --out "
                                "or delete this directory", path=out)
+        if old.get("identity") != identity:  # a run that failed before finishing a chunk: nothing to keep
+            for kind in (*PART_KINDS, LEDGER_DIR):
+                if (out / kind).is_dir():
+                    shutil.rmtree(out / kind)
+            _write_run_file(path, identity)
     elif out.is_dir() and any(out.iterdir()):
         raise ResultsError("is not empty and is not a main-bench results directory; give a new --out", path=out)
     else:
-        atomic_write_json(path, {"schema_version": 1, "identity": identity, "toolkit_version": __version__})
+        _write_run_file(path, identity)
+
+
+def _write_run_file(path: Path, identity: dict[str, Any]) -> None:
+    atomic_write_json(path, {"schema_version": 1, "identity": identity, "toolkit_version": __version__})
+
+
+def _finished_work(out: Path) -> bool:
+    """Whether the results folder holds a finished chunk (its ledger entry) or a summary."""
+    return (out / "summary.json").is_file() or any((out / LEDGER_DIR).rglob("*.json"))
 
 
 def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> EvaluationOutcome:
@@ -183,12 +195,19 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
     meta = submission_meta(settings)
     settings = replace(settings, submission=meta)
     out = Path(settings.out)
-    _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
+    if out.exists() and not out.is_dir():
+        raise ResultsError("--out exists and is not a folder; give a folder for the results", path=out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ResultsError(f"cannot make the results folder ({exc.strerror}); give another --out", path=out) from None
+
     def busy() -> ResultsError:
         return ResultsError("another evaluation is writing to it now; wait for it to end or give another --out",
                             path=out)
 
     with folder_lock(out, busy):  # two runs in one folder would take each other's files for leftovers
+        _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
         return _run(settings, manifest, chunks, out, progress, pool, t0)
 
 

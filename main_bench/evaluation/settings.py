@@ -38,6 +38,27 @@ class SubmissionMeta:
         """JSON-ready dict (links as a list)."""
         return {**asdict(self), "links": list(self.links)}
 
+    @classmethod
+    def from_json(cls, doc: dict[str, Any], path: Path, error: type[InputError] = InputError) -> SubmissionMeta:
+        """The metadata of a `submission.json` or of summary.json's `submission`: each field optional, and one of
+        the wrong type raises `error` naming `path`, the field and what it must be (links: a string or a list of
+        strings; baseline: true or false; the others strings)."""
+        def text(key: str) -> str:
+            value = doc.get(key)
+            if value is not None and not isinstance(value, str):
+                raise error(f"{key} must be a string, got {type(value).__name__} {value!r:.60}", path=path)
+            return value or ""
+
+        links = doc.get("links")
+        links = [links] if isinstance(links, str) else [] if links is None else links
+        if not isinstance(links, list) or not all(isinstance(v, str) for v in links):
+            raise error(f"links must be a string or a list of strings, got {doc.get('links')!r:.60}", path=path)
+        baseline = doc.get("baseline", False)
+        if not isinstance(baseline, bool):
+            raise error(f"baseline must be true or false, got {baseline!r:.60}", path=path)
+        return cls(name=text("name"), description=text("description"), links=tuple(links), date=text("date"),
+                   baseline=baseline)
+
 
 @dataclass(frozen=True)
 class PolicyLimits:

@@ -93,7 +93,7 @@ def build_leaderboard(results_dirs: list[str | Path], out_dir: str | Path,
     seen: set[Path] = set()
     subs = []
     for d in results_dirs:
-        key = Path(d).resolve()
+        key = Path(os.path.realpath(d))  # Path.resolve raises on a link loop; load_submission then names it
         if key in seen:
             raise ResultsError("results directory given twice; pass each once", path=d)
         seen.add(key)

@@ -62,3 +62,29 @@ def fmt_bytes(value: float | None) -> str:
 def track_title(split: str, task: str, agents: int) -> str:
     """Human title of a track."""
     return f"{split} · {task}-target · {agents} agents"
+
+
+#: Characters dropped from every shown text: controls (C0, DEL, C1) and the bidirectional overrides and isolates
+#: that can make a name read as another (U+202A-U+202E, U+2066-U+2069).
+_HIDDEN = dict.fromkeys([*range(0x00, 0x20), *range(0x7F, 0xA0), *range(0x202A, 0x202F), *range(0x2066, 0x206A)])
+
+
+def shown_text(value: object) -> str:
+    """A user-supplied value as one line of plain text: hidden characters dropped, whitespace runs made one
+    space. Each report format escapes the result for itself (`markdown.md_escape`, `html.html_escape`)."""
+    text = "" if value is None else str(value)
+    return " ".join(text.replace("\t", " ").replace("\n", " ").replace("\r", " ").translate(_HIDDEN).split())
+
+
+def link_target(url: str) -> str | None:
+    """The URL if the reports may make it a link: http(s) with a host, no whitespace, quotes or angle brackets;
+    else None (the reports show it as text)."""
+    from urllib.parse import urlsplit
+
+    if url != shown_text(url) or any(c in url for c in " <>\"'`\\"):
+        return None
+    try:
+        parts = urlsplit(url)
+    except ValueError:
+        return None
+    return url if parts.scheme in ("http", "https") and parts.netloc else None

@@ -5,17 +5,21 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from ..evaluation.scoring.task_rules import describe_rules
-from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, track_title
+from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, link_target, shown_text, track_title
 from .provenance import BuildInfo
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
 
 
-def md_escape(text: str) -> str:
-    """Escape text for a Markdown table cell: pipes, HTML brackets, backslashes and newlines."""
-    out = text.replace("\\", "\\\\").replace("|", "\\|").replace("<", "&lt;").replace(">", "&gt;")
-    for ch in "*_`[]":
-        out = out.replace(ch, "\\" + ch)
-    return " ".join(out.split())
+def md_escape(value: object) -> str:
+    """Any text shown in README.md, as literal Markdown text on one line (in a table cell, a heading, a list):
+    HTML brackets and entities as entities, Markdown's punctuation backslash-escaped (`shown_text` first)."""
+    out = shown_text(value).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return "".join("\\" + ch if ch in _MD_SPECIAL else ch for ch in out)
+
+
+#: Characters with a meaning inside a line of (GitHub-flavoured) Markdown: emphasis, code, links and images (no
+#: link without its brackets), table cells, closing heading marks, strikethrough, math, escapes.
+_MD_SPECIAL = frozenset("\\`*_[]#!|~$")
 
 
 def _name(sub) -> str:
@@ -26,10 +30,10 @@ def track_markdown(table: TrackTable) -> str:
     """One track table: rank, method, each metric as `mean [lo, hi]`, episode count."""
     head = ["#", "Method", "Mode"] + [t for c, t in TRACK_METRICS] + ["Bytes/agent-step",
                                                                                      "Episodes", "vs next"]
-    lines = [f"### {track_title(table.split, table.task, table.agents)}", "",
+    lines = [f"### {md_escape(track_title(table.split, table.task, table.agents))}", "",
              "| " + " | ".join(head) + " |", "|" + "|".join(["---:", ":---", ":---"] + ["---:"] * (len(head) - 3)) + "|"]
     for e in table.entries:
-        cells = [str(e.rank), _name(e.submission), e.submission.mode]
+        cells = [str(e.rank), _name(e.submission), md_escape(e.submission.mode)]
         for col, _ in TRACK_METRICS:
             mean, ci = fmt_estimate(col, e.metrics[col])
             cells.append(f"{mean} {ci}")
@@ -43,7 +47,7 @@ def track_markdown(table: TrackTable) -> str:
 def table2_markdown(t2: Table2) -> str:
     """MAIN Table 2: one column group per agent count (Length, Distance, Success rate, SPL)."""
     head = ["Method"] + [f"{n} agents: {t}" for n in t2.agent_counts for c, t in TABLE2_METRICS]
-    lines = [f"### Table 2 shape: {t2.split} · {t2.task}-target", "",
+    lines = [f"### Table 2 shape: {md_escape(t2.split)} · {md_escape(t2.task)}-target", "",
              "| " + " | ".join(head) + " |", "|" + "|".join([":---"] + ["---:"] * (len(head) - 1)) + "|"]
     for sub in t2.methods:
         cells = [_name(sub)]
@@ -67,13 +71,13 @@ def _submissions_markdown(section, runs: Mapping[str, str]) -> str:
             text += f" ({md_escape(s.date)})"
         if s.description:
             text += f": {md_escape(s.description)}"
-        links = [f"<{u}>" for u in s.links if u.startswith(("http://", "https://")) and " " not in u and ">" not in u]
+        links = [f"<{link_target(u)}>" if link_target(u) else md_escape(u) for u in s.links]
         if links:
             text += " " + " ".join(links)
         if s.name in runs:
             text += f" · [episodes and pictures](runs/{runs[s.name]}.md)"
         if s.command:
-            text += f"\n  reproduce: `{s.command.replace('`', '')}`"
+            text += f"\n  reproduce: `{shown_text(s.command).replace('`', '')}`"
         lines.append(text)
     return "\n".join(lines)
 
@@ -93,7 +97,8 @@ def render_markdown(sections, settings, figure_files: dict[tuple[int, str], str]
                 "ranked on its own and numbers must not be compared across sections.**", ""]
     for sec in sections:
         out += [f"## {md_escape(sec.title)}", "",
-                f"Episodes: `{sec.dataset_path or '(path not recorded)'}`, manifest hash `{sec.manifest_hash}`", "",
+                f"Episodes: {md_escape(sec.dataset_path or '(path not recorded)')}, manifest hash "
+                f"{md_escape(sec.manifest_hash)}", "",
                 f"Task rules: {md_escape(describe_rules(sec.task_rules) or '(not recorded)')}", "",
                 _submissions_markdown(sec, runs or {}), ""]
         out += [track_markdown(t) + "\n" for t in sec.tracks]

@@ -16,6 +16,7 @@ import pandas as pd
 from ..errors import ResultsError
 from ..evaluation.records import TEAM
 from ..evaluation.results import Results, load_results
+from ..evaluation.settings import SubmissionMeta
 from .provenance import reproduce_command
 
 
@@ -77,19 +78,17 @@ def submission_from_results(results: Results) -> Submission:
     if not manifest_hash:
         raise ResultsError("summary.json has no dataset.manifest_hash, so it cannot be compared with other "
                            "submissions; re-run main-bench evaluate", path=summary_path)
-    links = meta.get("links") or ()
-    if isinstance(links, str):
-        links = (links,)
+    fields = SubmissionMeta.from_json(meta, summary_path, ResultsError)
     settings = summary.get("settings") or {}
     sensor_track = _text(settings.get("track") if isinstance(settings, dict) else "")
     mode = _text(settings.get("mode") if isinstance(settings, dict) else "") or "central"  # older results: central
     floats = settings.get("message_floats") if isinstance(settings, dict) else 0
     return Submission(
-        name=_text(meta.get("name")).strip(),
-        description=_text(meta.get("description")),
-        links=tuple(_text(v) for v in links),
-        date=_text(meta.get("date")),
-        baseline=meta.get("baseline") is True,
+        name=fields.name.strip(),
+        description=fields.description,
+        links=fields.links,
+        date=fields.date,
+        baseline=fields.baseline,
         results_dir=results.path,
         manifest_hash=manifest_hash,
         dataset_path=_text(dataset.get("path")),

@@ -66,7 +66,8 @@ def load_scene_geometry(path: str | Path, *, up: UpAxis = "auto", scale: float |
 
 def _write(entry: Path, scene: Scene) -> None:
     meta = {"layout": CACHE_LAYOUT, "scene_id": scene.scene_id, "up_axis": scene.up_axis,
-            "up_reason": scene.up_reason, "scale": scene.scale, "scale_reason": scene.scale_reason,
+            "up_reason": scene.up_reason, "up_rule": scene.up_rule, "scale": scene.scale,
+            "scale_reason": scene.scale_reason,
             "content_hash": scene.content_hash, "rooms": list(scene.rooms),
             "objects": [{"instance_id": o.instance_id, "category": o.category, "name": o.name, "room": o.room}
                         for o in scene.objects]}
@@ -93,6 +94,7 @@ def _read(entry: Path, path: Path) -> Scene | None:
         return Scene(scene_id=str(meta["scene_id"]), path=path,
                      meshes=(), vertices=vertices, faces=faces,
                      objects=objects, up_axis=meta["up_axis"], up_reason=str(meta["up_reason"]),
+                     up_rule=str(meta["up_rule"]),
                      scale=float(meta["scale"]), scale_reason=str(meta["scale_reason"]),
                      content_hash=str(meta["content_hash"]), rooms=tuple(meta["rooms"]))
     except Exception:  # a damaged or foreign entry is rebuilt, never trusted

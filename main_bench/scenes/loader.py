@@ -1,7 +1,8 @@
 """Scene loading: any mesh file trimesh reads, flattened and converted to the canonical frame.
 
-Canonical frame: right-handed, +Z up, metres. glTF files are +Y up by their specification; OBJ and PLY say
-nothing, so `up="auto"` decides from the geometry: floors under walls that enclose them (see `up_axis.py`).
+Canonical frame: right-handed, +Z up, metres. glTF files are +Y up by their specification and `up="auto"` reads
+them so (unless that reading is no plausible indoor scene and +Z is); OBJ and PLY say nothing, so `up="auto"`
+decides from the geometry: floors under walls that enclose them (see `up_axis.py`).
 """
 
 from __future__ import annotations
@@ -65,6 +66,8 @@ class Scene:
     scale_reason: str
     content_hash: str
     rooms: tuple[dict, ...] = field(default=())
+    #: What decided `up_axis`: given (--up), sidecar, gltf-convention or geometry (`up_axis.UpRule`).
+    up_rule: str = "given"
 
     @property
     def triangle_count(self) -> int:
@@ -91,6 +94,7 @@ class Scene:
             "size": [round(float(v), 4) for v in hi - lo],
             "up_axis": self.up_axis,
             "up_reason": self.up_reason,
+            "up_rule": self.up_rule,
             "scale": self.scale,
             "scale_reason": self.scale_reason,
             "content_hash": self.content_hash,
@@ -158,7 +162,6 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
         raise SceneError(f"all {len(faces_all)} triangles are degenerate (zero area); no surface to walk on",
                          path=path)
 
-    is_gltf = path.suffix.lower() in (".glb", ".gltf")
     extents = np.ptp(vertices, axis=0)
 
     def units(axis: str) -> tuple[float, str]:
@@ -169,10 +172,10 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
         units("y" if up == "auto" else up)  # absurd in every frame: that error comes first
     declared = _sidecar_up(path) if up == "auto" else None
     if declared is not None:
-        up_axis, up_reason = declared, "objects sidecar (written by `scenes import`) says so"
+        up_axis, up_rule, up_reason = declared, "sidecar", "objects sidecar (written by `scenes import`) says so"
     else:
-        up_axis, up_reason = decide_up(vertices, faces_all, up, is_gltf, path,
-                                       lambda axis: _metres(units, axis) or 1.0)
+        up_axis, up_rule, up_reason = decide_up(vertices, faces_all, up, path.suffix.lower()[1:], path,
+                                                lambda axis: _metres(units, axis) or 1.0)
     transform = Y_UP_TO_Z_UP.copy() if up_axis == "y" else np.eye(4)
     factor, scale_reason = units(up_axis)
     transform[:3, :3] *= factor
@@ -198,6 +201,7 @@ def load_scene(path: str | Path, *, up: UpAxis = "auto", scale: float | None = N
         objects=objects,
         up_axis=up_axis,
         up_reason=up_reason,
+        up_rule=up_rule,
         scale=factor,
         scale_reason=scale_reason,
         content_hash=scene_content_hash(path),

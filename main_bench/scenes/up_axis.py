@@ -1,23 +1,28 @@
-"""Which axis of a scene file is up: the evidence for each candidate frame, and the decision `--up auto` makes.
+"""Which axis of a scene file is up: the rule that decides it and the evidence for each candidate frame.
 
-In: the file's vertices and faces (file units), the format's own rule (glTF is +Y up) and metres per unit for
-each candidate. Out: "y" or "z" and a sentence saying on what evidence, or a `SceneError` naming the file.
+In: the file's vertices and faces (file units), its format and metres per unit for each candidate. Out: "y" or
+"z", the rule that decided (`UpRule`) and a sentence saying on what evidence, or a `SceneError` naming the file.
+
+The rules, in order: a given `--up`; an objects sidecar's `up_axis` (`loader`); a format's own convention (glTF
+is +Y up by its specification), overruled only where the +Z reading is a plausible indoor scene and the +Y
+reading is none or clearly less enclosed by its walls (a Z-up file exported against the specification); for
+formats without a convention (OBJ, PLY), the geometric test below.
 
 A candidate frame (file +Y or +Z up) is judged as an indoor scene would be:
 
-- its floor is the lowest large horizontal surface (at least `FLOOR_MIN_M2` within one `LEVEL_BAND_M` band)
-  with room to stand on it (`STANDABLE_MIN` of its points clear of any surface by `CLEARANCE_M`);
+- its floor is the lowest large horizontal surface (at least `FLOOR_MIN_M2` within one `LEVEL_BAND_M` band, and
+  `FLOOR_SHARE` of the largest such band: a pit or a lift shaft's bottom below the ground floor is none) with
+  room to stand on it (`STANDABLE_MIN` of its points clear of any surface by `CLEARANCE_M`);
 - the walls (vertical surfaces) start there: at most `WALLS_BELOW_MAX` of their area lies more than
-  `FLOOR_TOL_M` below the floor;
+  `FLOOR_TOL_M` below the floor without standing on a horizontal surface of its own (a shaft, a basement);
 - where there are walls (vertical area rising from the floor at least `WALLED_RATIO` times the floor's area),
   they enclose it: of horizontal rays cast `RAY_HEIGHT_M` above sample points of the floor, at least
   `ENCLOSED_MIN` hit a surface. Exported scenes often lack a ceiling, never most of their walls: turning a
   ceiling-less room on its side leaves one side open, a room of walls only two sides.
 
 A frame that fails is never accepted. When both pass, a frame clearly more enclosed than the other wins (unless
-its floor is much the smaller), then one whose floor is `FLOOR_WIN_RATIO` times the other's, then the format's
-rule and the flat-area comparison (the axis most flat surface faces along) must agree with a clear
-margin; otherwise the evidence is ambiguous and `--up` must be given.
+its floor is much the smaller), then one whose floor is `FLOOR_WIN_RATIO` times the other's, then one with
+`FLAT_MARGIN` times the other's flat area; otherwise the evidence is ambiguous and `--up` must be given.
 """
 
 from __future__ import annotations
@@ -37,8 +42,9 @@ HORIZONTAL_COS, VERTICAL_COS = 0.95, 0.2
 #: Height band (m) of one floor level; least floor area (m^2) in one band.
 LEVEL_BAND_M, FLOOR_MIN_M2 = 0.15, 1.0
 #: A floor has room to stand: this share of its sample points is at least `CLEARANCE_M` from any surface at
-#: `RAY_HEIGHT_M` above it (the bottom faces of walls are no floor). At most `MAX_LEVELS` levels are tried.
-STANDABLE_MIN, CLEARANCE_M, MAX_LEVELS = 0.25, 0.2, 8
+#: `RAY_HEIGHT_M` above it (the bottom faces of walls are no floor). Only levels holding `FLOOR_SHARE` of the
+#: largest level's area are floors (a pit, a lift shaft's bottom or a landing is not the building's floor).
+STANDABLE_MIN, CLEARANCE_M, FLOOR_SHARE = 0.25, 0.2, 0.25
 #: Walls may start this far (m) below the floor (slab thickness, skirting), and this share of wall area lower.
 FLOOR_TOL_M, WALLS_BELOW_MAX = 0.3, 0.05
 #: A frame has walls when the vertical area within `STOREY_M` above its floor is this many times the floor's.
@@ -48,8 +54,9 @@ RAY_HEIGHT_M, RAY_DIRECTIONS, RAY_POINTS = 1.0, 16, 48
 #: Least share of rays that must hit a wall in a walled frame; a frame this much more enclosed wins outright
 #: unless its floor is less than `FLOOR_RATIO_MIN` times the other frame's (a small enclosed patch).
 ENCLOSED_MIN, ENCLOSED_MARGIN, FLOOR_RATIO_MIN = 0.6, 0.15, 0.5
-#: A frame whose floor is this many times the other's wins when the walls do not decide.
-FLOOR_WIN_RATIO = 2.0
+#: A frame whose floor is this many times the other's wins when the walls do not decide: a building's floors
+#: span its footprint, its outer walls its height (a building 1.5 times as deep as it is tall).
+FLOOR_WIN_RATIO = 1.5
 #: Flat-area ratio needed for the flat-area comparison to count as clear evidence.
 FLAT_MARGIN = 1.5
 
@@ -84,49 +91,80 @@ class FrameEvidence:
         return text + (f" ({self.problem})" if self.problem else "")
 
 
-def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, is_gltf: bool, path: Path,
-              metres: Callable[[Axis], float]) -> tuple[Axis, str]:
-    """The file's up axis and why. `up` y or z is checked for a floor; auto weighs the evidence (module doc).
+#: What decided a scene's up axis (`Scene.up_rule`, `scenes info --json` "up_rule").
+UpRule = Literal["given", "sidecar", "gltf-convention", "geometry"]
+#: Formats whose specification fixes the up axis: glTF is +Y up.
+GLTF_FORMATS = ("glb", "gltf")
 
-    `metres(axis)`: metres per file unit when `axis` is up. Raises `SceneError` naming the file for a scene
-    with no floor in the given frame, with no plausible frame, or (auto) with ambiguous evidence.
+
+def decide_up(vertices: np.ndarray, faces: np.ndarray, up: str, fmt: str, path: Path,
+              metres: Callable[[Axis], float]) -> tuple[Axis, UpRule, str]:
+    """The file's up axis, the rule that decided it and a sentence saying why.
+
+    `up` y or z is checked for a floor and kept. With auto, a glTF file (`fmt` glb or gltf) is +Y up by its
+    specification; the geometry overrules that only where the +Z reading is a plausible indoor scene and the +Y
+    one is none or clearly less enclosed (module doc). Other formats (OBJ, PLY) say nothing: the geometry
+    decides. `metres(axis)`: metres per file unit when `axis` is up. Raises `SceneError` naming the
+    file for a scene with no floor in the given frame, with no plausible frame, or (geometry) with ambiguous
+    evidence.
     """
     tri = vertices[faces]
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     area2 = np.linalg.norm(cross, axis=1)
     keep = area2 > 0
     tri, normals, area = tri[keep], cross[keep] / area2[keep, None], area2[keep] / 2
+
+    def floor_as_given(axis: Axis) -> FrameEvidence:
+        """The frame's lowest large horizontal band, as a given --up takes it (no room to stand asked)."""
+        return frame_evidence(tri, normals, area, axis, metres(axis), standing=False)
+
+    def has_floor(ev: FrameEvidence) -> bool:
+        return ev.floor_z is not None and ev.walls_below <= WALLS_BELOW_MAX
+
     if up in ("y", "z"):
-        ev = frame_evidence(tri, normals, area, up, metres(up), standing=False)  # type: ignore[arg-type]
-        if ev.floor_z is None or ev.walls_below > WALLS_BELOW_MAX:
+        ev = floor_as_given(up)  # type: ignore[arg-type]
+        if not has_floor(ev):
             raise SceneError(f"no floor with --up {up}: {ev.describe()}; check the file or its --up", path=path)
-        return up, "given"  # type: ignore[return-value]
+        return up, "given", "given"  # type: ignore[return-value]
+    name = fmt.upper()
     y = frame_evidence(tri, normals, area, "y", metres("y"))
     z = frame_evidence(tri, normals, area, "z", metres("z"))
     both = f"{y.describe()}; {z.describe()}"
+    if fmt in GLTF_FORMATS:
+        if z.ok and (not y.ok or _better_enclosed(z, y)):
+            return "z", "geometry", (f"geometric test on {name}: read +Y up as glTF specifies, the file is no "
+                                     f"indoor scene ({both})")
+        if y.ok or has_floor(floor_as_given("y")):
+            return "y", "gltf-convention", "glTF convention: +Y up"
     if not y.ok and not z.ok:
         raise SceneError(f"no floor in either frame ({both}); a scene needs a floor under its walls, "
                          "or give --up y|z if the file is right", path=path)
+    axis, why = _by_geometry(y, z, both, path)
+    return axis, "geometry", f"geometric test on {name}: {why}"
+
+
+def _by_geometry(y: FrameEvidence, z: FrameEvidence, both: str, path: Path) -> tuple[Axis, str]:
+    """The up axis the evidence of both frames points to (at least one is plausible), and why."""
     if y.ok != z.ok:
         pick = y if y.ok else z
-        return pick.axis, f"geometry: {pick.describe()}; the other frame fails ({(z if y.ok else y).describe()})"
-    if y.enclosure is not None and z.enclosure is not None and abs(y.enclosure - z.enclosure) >= ENCLOSED_MARGIN:
-        pick, other = (y, z) if y.enclosure > z.enclosure else (z, y)
-        if pick.floor_area >= FLOOR_RATIO_MIN * other.floor_area:
-            return pick.axis, f"geometry: walls enclose the floor best with +{pick.axis.upper()} up ({both})"
+        return pick.axis, f"{pick.describe()}; the other frame fails ({(z if y.ok else y).describe()})"
+    for pick, other in ((y, z), (z, y)):
+        if _better_enclosed(pick, other):
+            return pick.axis, f"walls enclose the floor best with +{pick.axis.upper()} up ({both})"
     big, small = (y, z) if y.floor_area >= z.floor_area else (z, y)
     if small.floor_area * FLOOR_WIN_RATIO <= big.floor_area:
-        return big.axis, f"geometry: the floor is largest with +{big.axis.upper()} up ({both})"
-    by_area: Axis | None = ("y" if y.flat_area > FLAT_MARGIN * z.flat_area else
-                            "z" if z.flat_area > FLAT_MARGIN * y.flat_area else None)
-    if is_gltf and by_area != "z":
-        return "y", "glTF specifies +Y up and the geometry agrees" + ("" if by_area else " or is even")
-    if is_gltf:
-        return "z", f"geometry: floors face +Z although glTF specifies +Y ({both})"
-    if by_area is not None:
-        return by_area, f"geometry: most flat surface area faces along {by_area.upper()} ({both})"
+        return big.axis, f"the floor is largest with +{big.axis.upper()} up ({both})"
+    if y.flat_area > FLAT_MARGIN * z.flat_area or z.flat_area > FLAT_MARGIN * y.flat_area:
+        axis: Axis = "y" if y.flat_area > z.flat_area else "z"
+        return axis, f"most flat surface area faces along {axis.upper()} ({both})"
     raise SceneError(f"cannot tell the up axis ({both}; flat area {y.flat_area:.1f} along Y, {z.flat_area:.1f} "
                      "along Z); give --up y or --up z", path=path)
+
+
+def _better_enclosed(a: FrameEvidence, b: FrameEvidence) -> bool:
+    """Whether walls enclose frame `a`'s floor clearly more than `b`'s, on a floor not much the smaller."""
+    return (a.enclosure is not None and b.enclosure is not None and a.enclosure - b.enclosure >= ENCLOSED_MARGIN
+            and a.floor_area >= FLOOR_RATIO_MIN * b.floor_area)
 
 
 def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis: Axis, metres: float,
@@ -145,12 +183,21 @@ def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis:
     heights = tri[:, :, k]
     tri2 = tri[:, :, h]
     centre = heights.mean(axis=1)
+    levels = _levels(centre[horizontal], area[horizontal])
+    largest = max((a for _, a in levels), default=0.0)
+
+    def room_to_stand(level_z: float) -> tuple[np.ndarray, np.ndarray]:
+        """(wall segments at `RAY_HEIGHT_M` above the level, its sample points clear of them)."""
+        in_level = horizontal & (centre >= level_z) & (centre <= level_z + LEVEL_BAND_M)
+        segs = _slice(tri2, heights, level_z + RAY_HEIGHT_M)
+        points = _sample(tri2[in_level], area[in_level])
+        return segs, points[_clearance(points, segs) >= CLEARANCE_M]
+
     floor = None
-    for floor_z, floor_area in _levels(centre[horizontal], area[horizontal]):
-        in_floor = horizontal & (centre >= floor_z) & (centre <= floor_z + LEVEL_BAND_M)
-        segs = _slice(tri2, heights, floor_z + RAY_HEIGHT_M)
-        points = _sample(tri2[in_floor], area[in_floor])
-        points = points[_clearance(points, segs) >= CLEARANCE_M]
+    for floor_z, floor_area in levels:
+        if floor_area < FLOOR_SHARE * largest:  # a pit, a shaft's bottom, a step: not the building's floor
+            continue
+        segs, points = room_to_stand(floor_z)
         if not standing or len(points) >= STANDABLE_MIN * RAY_POINTS:
             floor = (floor_z, floor_area, segs, points)
             break
@@ -161,7 +208,13 @@ def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis:
     wall_lo = heights[vertical].min(axis=1)
     wall_area = area[vertical]
     total_walls = float(wall_area.sum())
-    below = float(wall_area[wall_lo < floor_z - FLOOR_TOL_M].sum()) / total_walls if total_walls else 0.0
+    # Walls below the floor count against it unless they rise from a lower level with room to stand (a pit, a
+    # lift shaft's bottom, a basement).
+    hanging = wall_lo < floor_z - FLOOR_TOL_M
+    for level_z, _ in levels:
+        if level_z < floor_z - FLOOR_TOL_M and len(room_to_stand(level_z)[1]) >= STANDABLE_MIN * RAY_POINTS:
+            hanging &= np.abs(wall_lo - level_z) > FLOOR_TOL_M
+    below = float(wall_area[hanging].sum()) / total_walls if total_walls else 0.0
     rising = float(wall_area[(wall_lo >= floor_z - FLOOR_TOL_M) & (wall_lo <= floor_z + STOREY_M)].sum())
     walled = rising >= WALLED_RATIO * floor_area
     if below > WALLS_BELOW_MAX:
@@ -175,7 +228,7 @@ def frame_evidence(tri: np.ndarray, normals: np.ndarray, area: np.ndarray, axis:
 
 
 def _levels(heights: np.ndarray, area: np.ndarray) -> list[tuple[float, float]]:
-    """(height, area) of the lowest `MAX_LEVELS` bands of horizontal faces holding at least FLOOR_MIN_M2."""
+    """(height, area) of the bands of horizontal faces holding at least FLOOR_MIN_M2, lowest first."""
     if len(heights) == 0:
         return []
     order = np.argsort(heights, kind="stable")
@@ -188,8 +241,6 @@ def _levels(heights: np.ndarray, area: np.ndarray) -> list[tuple[float, float]]:
     for i in np.flatnonzero(band >= FLOOR_MIN_M2):
         if not out or hs[i] > out[-1][0] + LEVEL_BAND_M:
             out.append((float(hs[i]), float(band[i])))
-            if len(out) == MAX_LEVELS:
-                break
     return out
 
 

@@ -132,8 +132,9 @@ def test_gltf_without_triangles_or_not_a_mesh(cli, tmp_path):
 def test_up_override_through_the_cli(cli, tmp_path):
     y_up = box_obj(tmp_path / "y.obj", (8, 6, 2.5), z_up=False)
     auto = json.loads(cli("scenes", "info", y_up, "--json").out)
-    assert auto["up_axis"] == "y" and auto["up_reason"].startswith("geometry")
+    assert auto["up_axis"] == "y" and auto["up_reason"].startswith("geometric test on OBJ: ")
+    assert auto["up_rule"] == "geometry"
     assert auto["size"] == pytest.approx([8, 6, 2.5]) and auto["bounds_min"][2] == pytest.approx(0.0)
     forced = json.loads(cli("scenes", "info", y_up, "--up", "z", "--json").out)
-    assert forced["up_axis"] == "z" and forced["up_reason"] == "given"
+    assert forced["up_axis"] == "z" and forced["up_reason"] == "given" and forced["up_rule"] == "given"
     assert forced["size"] == pytest.approx([8, 2.5, 6])

@@ -20,8 +20,8 @@ def house(tmp_path_factory):
 def _same(a, b):
     assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
     assert a.objects == b.objects and a.rooms == b.rooms and a.content_hash == b.content_hash
-    assert (a.scene_id, a.up_axis, a.up_reason, a.scale, a.scale_reason) == \
-        (b.scene_id, b.up_axis, b.up_reason, b.scale, b.scale_reason)
+    assert (a.scene_id, a.up_axis, a.up_reason, a.up_rule, a.scale, a.scale_reason) == \
+        (b.scene_id, b.up_axis, b.up_reason, b.up_rule, b.scale, b.scale_reason)
 
 
 def test_repeat_load_reads_the_cache_and_matches_a_fresh_load(house, tmp_path):

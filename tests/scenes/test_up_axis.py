@@ -66,7 +66,7 @@ def test_ceilingless_room_loads_z_up_and_says_why(cli, tmp_path, thick, suffix):
     assert scene.up_axis == "z", scene.up_reason
     assert "enclose" in scene.up_reason and "+Y" in scene.up_reason and "+Z" in scene.up_reason
     r = cli("scenes", "info", path)
-    assert r.code == 0 and "up axis    +Z in the file (geometry: walls enclose" in r.out, r.out
+    assert r.code == 0 and f"up axis    +Z in the file (geometric test on {suffix[1:].upper()}: " in r.out, r.out
     # The floor is where the walls start: the navmesh lies on it, 5 x 4 m less the agent radius at the walls.
     r = cli("navmesh", "build", path, "--out", tmp_path / "nav.npz", "--json")
     assert r.code == 0, r.err
@@ -105,7 +105,7 @@ def test_symmetric_evidence_is_refused_naming_up(tmp_path):
     cube = trimesh.creation.box(extents=(4.0, 4.0, 4.0))
     v, f = np.asarray(cube.vertices, float), np.asarray(cube.faces)
     with pytest.raises(SceneError, match="give --up y or --up z") as err:
-        decide_up(v, f, "auto", False, tmp_path / "cube.obj", lambda axis: 1.0)
+        decide_up(v, f, "auto", "obj", tmp_path / "cube.obj", lambda axis: 1.0)
     assert str(tmp_path / "cube.obj") in str(err.value)
 
 
