@@ -57,8 +57,8 @@ def dataset_path(results: Results) -> Path:
     """The episode data set a results directory was evaluated on (summary.dataset.path; a relative path is
     tried from the working directory, then from the results directory)."""
     raw = (results.summary.get("dataset") or {}).get("path")
-    if not raw:
-        raise ResultsError("summary.json names no dataset.path; re-run main-bench evaluate",
+    if not raw or not isinstance(raw, str):
+        raise ResultsError(f"summary.json names no dataset.path (found {raw!r}); re-run main-bench evaluate",
                            path=results.path / "summary.json")
     path = Path(raw)
     if not path.is_absolute() and not path.is_dir() and (results.path / path).is_dir():
@@ -137,7 +137,8 @@ def load_episode_view(results_dir: str | Path, episode_id: str, *, cache_dir: st
         except (MainBenchError, ImportError, OSError) as exc:
             note, reason = "no map: scene not available", f"no map: {exc}"
     name = str((results.summary.get("submission") or {}).get("name", results.path.name))
+    rules = results.summary.get("task_rules")
     return EpisodeView(episode=ep, results_dir=results.path, submission=name, trajectory=traj,
                        agent_records=agents, team_record=team.iloc[0], paths_walked=walked, scene=scene,
                        navmesh=navmesh, shortest_paths=shortest, note=note,
-                       map_reason=reason, task_rules=dict(results.summary.get("task_rules") or {}))
+                       map_reason=reason, task_rules=dict(rules) if isinstance(rules, dict) else {})
