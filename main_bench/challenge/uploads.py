@@ -156,7 +156,7 @@ def _unpack_zip(archive: Path, writer: _Writer) -> None:
                 mode = info.external_attr >> 16
                 if stat.S_ISLNK(mode):
                     raise refuse(f"{info.filename!r} is a symbolic link; links are not accepted")
-                if mode and not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+                if stat.S_IFMT(mode) not in (0, stat.S_IFREG, stat.S_IFDIR):
                     raise refuse(f"{info.filename!r} is a special file; only files and folders are accepted")
                 if info.is_dir():
                     writer.folder(parts)

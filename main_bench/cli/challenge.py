@@ -158,6 +158,11 @@ def serve(
     resamples: int = typer.Option(2000, "--resamples", min=100, help="Bootstrap resamples of the leaderboards."),
 ) -> None:
     """Serve a challenge: take submissions over HTTP, check and score them, publish the leaderboards."""
+    try:
+        import starlette  # noqa: F401
+        import uvicorn  # noqa: F401
+    except ImportError:
+        raise InputError("main-bench serve needs Starlette and uvicorn: pip install 'main-bench[serve]'") from None
     from ..challenge.app import ServerSettings
     from ..challenge.app import serve as run_server
     from ..challenge.config import read_config
