@@ -168,10 +168,11 @@ def _unpack_zip(archive: Path, writer: _Writer) -> None:
 
 
 def policy_root(dest: Path) -> Path:
-    """The unpacked policy folder: `dest` when it holds policy.py, else its single top-level folder that does."""
+    """The unpacked policy folder: `dest` when it holds policy.py, else its single top-level folder that does,
+    renamed `policy` (a name chosen by the uploader never reaches a command line: `a:b` would read as a spec)."""
     if (dest / "policy.py").is_file():
         return dest
     children = list(dest.iterdir())
     if len(children) == 1 and children[0].is_dir() and (children[0] / "policy.py").is_file():
-        return children[0]
+        return children[0] if children[0].name == "policy" else children[0].rename(dest / "policy")
     raise refuse("no policy.py at the top of the archive; submit the folder that holds policy.py")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import tarfile
+
 import pytest
 from hostile import hostile_archives, many_files, zip_bomb
 
@@ -49,13 +51,17 @@ def test_too_many_files_is_refused(tmp_path):
 def test_a_good_folder_unpacks_with_its_subfolders(tmp_path):
     from main_bench.challenge.client import pack
 
-    src = tmp_path / "src" / "team_policy"
+    src = tmp_path / "src" / "team:policy --x"
     (src / "weights").mkdir(parents=True)
     (src / "policy.py").write_text("class Policy: ...\n")
     (src / "weights" / "w.npy").write_bytes(b"\x93NUMPY")
     (tmp_path / "up.tar.gz").write_bytes(pack(src))
     got = unpack(tmp_path / "up.tar.gz", tmp_path / "out", CAPS)
     assert got.root == tmp_path / "out" and got.files == 2
+    with tarfile.open(tmp_path / "nested.tar.gz", "w:gz") as tar:  # the folder itself at the archive's top
+        tar.add(src, arcname=src.name)
+    nested = unpack(tmp_path / "nested.tar.gz", tmp_path / "out2", CAPS)
+    assert nested.root == tmp_path / "out2" / "policy" and (nested.root / "weights" / "w.npy").is_file()
     assert (got.root / "weights" / "w.npy").read_bytes() == b"\x93NUMPY"
     (src / "link").symlink_to("/etc/passwd")
     with pytest.raises(ChallengeError, match="link"):
