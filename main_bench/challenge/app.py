@@ -24,6 +24,8 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import parse_qs
 
+import anyio
+import anyio.to_thread
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.requests import ClientDisconnect, Request
@@ -48,6 +50,8 @@ from .uploads import Caps, refuse, unpack
 
 SERVER_FILE = "server.json"
 COOKIE = "main_bench_token"
+#: Uploads unpacked at once.
+UNPACKERS = 2
 #: Bytes of each log file a team is shown.
 LOG_SHOWN = 64 * 1024
 
@@ -82,6 +86,9 @@ class Challenge:
                                self.store, self.board)
         c = self.config
         self.caps = Caps(int(c.max_upload_mb * 2**20), c.max_files, int(c.max_unpacked_mb * 2**20))
+        #: Threads unpacking or storing uploads at once: more would only contend for the GIL with the event
+        #: loop (every status call waits for it), not unpack faster.
+        self.intake = anyio.CapacityLimiter(UNPACKERS)
 
     def team(self, request: Request, cookie: bool = False):
         """The team of the request's token (header, or the cookie for pages); 401 without a valid one."""
@@ -146,13 +153,14 @@ def create_app(settings: ServerSettings) -> Starlette:
         part, staging = ch.root / UPLOADS / f"{key}.part", ch.root / UPLOADS / key
         try:
             size, digest = await _receive(request, part, ch.caps.upload_bytes)
-            unpacked = await run_in_threadpool(unpack, part, staging, ch.caps)
+            unpacked = await anyio.to_thread.run_sync(unpack, part, staging, ch.caps, limiter=ch.intake)
             final = ch.root / SUBMISSIONS / key
             staging.rename(final)
             folder = Path(SUBMISSIONS, key, unpacked.root.relative_to(staging)).as_posix()
             try:
-                sid = await run_in_threadpool(ch.store.add_submission, team, phase.name, mode, folder, digest,
-                                              size, unpacked.files, ch.config.quota_per_day, day)
+                sid = await anyio.to_thread.run_sync(ch.store.add_submission, team, phase.name, mode, folder,
+                                                     digest, size, unpacked.files, ch.config.quota_per_day, day,
+                                                     limiter=ch.intake)
             except BaseException:
                 shutil.rmtree(final, ignore_errors=True)
                 raise
