@@ -76,6 +76,10 @@ class Challenge:
 
         self.root = settings.root
         self.config: ChallengeConfig = read_config(self.root)
+        for p in self.config.phases:
+            if not (dataset_path(self.root, p) / "manifest.json").is_file():
+                raise ChallengeError(f"phase {p.name}: no episode data set here (no manifest.json); generate it "
+                                     "with `main-bench episodes generate --out` this folder", path=dataset_path(self.root, p))
         self.manifests = {p.name: read_manifest(dataset_path(self.root, p)).manifest_hash
                           for p in self.config.phases}
         from .config import DB_FILE

@@ -126,3 +126,13 @@ def test_failing_check_agent_and_the_quota(served):
     assert status == 429 and "quota reached: 2 of 2" in doc["error"], doc
     subs = server.call("GET", "/api/submissions", token)[1]["submissions"]
     assert len(subs) == 2
+
+
+def test_a_second_server_on_the_folder_is_refused(served):
+    import subprocess
+    import sys
+
+    _, _, _, root = served
+    proc = subprocess.run([sys.executable, "-m", "main_bench.cli.app", "serve", str(root), "--port", "0"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "another server serves this folder now" in proc.stderr, proc.stderr
