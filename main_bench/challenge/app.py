@@ -45,7 +45,7 @@ from . import pages
 from .board import Board
 from .config import SHOW, ChallengeConfig, dataset_path, read_config
 from .queue import LOGS, RESULTS, SUBMISSIONS, UPLOADS, QueueSettings, Scheduler
-from .store import Store, Submission
+from .store import Store, Submission, Team
 from .uploads import Caps, refuse, unpack
 
 SERVER_FILE = "server.json"
@@ -77,9 +77,10 @@ class Challenge:
         self.root = settings.root
         self.config: ChallengeConfig = read_config(self.root)
         for p in self.config.phases:
-            if not (dataset_path(self.root, p) / "manifest.json").is_file():
+            folder = dataset_path(self.root, p)
+            if not (folder / "manifest.json").is_file():
                 raise ChallengeError(f"phase {p.name}: no episode data set here (no manifest.json); generate it "
-                                     "with `main-bench episodes generate --out` this folder", path=dataset_path(self.root, p))
+                                     "with `main-bench episodes generate --out` this folder", path=folder)
         self.manifests = {p.name: read_manifest(dataset_path(self.root, p)).manifest_hash
                           for p in self.config.phases}
         from .config import DB_FILE
@@ -94,7 +95,7 @@ class Challenge:
         #: loop (every status call waits for it), not unpack faster.
         self.intake = anyio.CapacityLimiter(UNPACKERS)
 
-    def team(self, request: Request, cookie: bool = False):
+    def team(self, request: Request, cookie: bool = False) -> Team:
         """The team of the request's token (header, or the cookie for pages); 401 without a valid one."""
         header = request.headers.get("authorization", "")
         token = header[7:].strip() if header.lower().startswith("bearer ") else None
