@@ -84,6 +84,7 @@ def _stream_until_refused(url: str, token: str, limit: int, chunked: bool) -> tu
     sock.sendall(head.encode())
     block = b"\x1f\x8b" + bytes(2**16 - 2)
     sent = 0
+    answer = b""
     try:
         while sent < limit:
             if select.select([sock], [], [], 0)[0]:
@@ -93,9 +94,13 @@ def _stream_until_refused(url: str, token: str, limit: int, chunked: bool) -> tu
         deadline = time.monotonic() + 30
         while not select.select([sock], [], [], 0.5)[0] and time.monotonic() < deadline:
             pass
-        answer = sock.recv(4096)
+        while b"error" not in answer and time.monotonic() < deadline:  # the head and the body may come apart
+            block = sock.recv(4096)
+            if not block:
+                break
+            answer += block
     except (BrokenPipeError, ConnectionResetError):
-        answer = b""
+        pass  # the server closed the connection: what it answered before is kept
     finally:
         sock.close()
     return sent, answer
