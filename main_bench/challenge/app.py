@@ -185,8 +185,8 @@ def create_app(settings: ServerSettings) -> Starlette:
         return JSONResponse({**ch.view(sub, organiser), "events": ch.store.events(sub.id)})
 
     async def log(request: Request) -> Response:
-        sub, _ = ch.own(request, _sid(request), cookie=True)
-        return PlainTextResponse(_log_text(ch, sub))
+        sub, organiser = ch.own(request, _sid(request), cookie=True)
+        return PlainTextResponse(_log_text(ch, sub, ch.board.visible(sub, organiser)))
 
     async def board_json(request: Request) -> Response:
         ch.team(request)
@@ -317,10 +317,11 @@ def _phase_json(ch: Challenge, name: str) -> dict[str, Any]:
             "manifest_hash": ch.manifests[name], "published": len(ch.board.published(name))}
 
 
-def _log_text(ch: Challenge, sub: Submission) -> str:
+def _log_text(ch: Challenge, sub: Submission, with_scores: bool) -> str:
     """The submission's logs: check-agent's and the evaluation's output and the policy logs in its results
-    folder, each cut to its last `LOG_SHOWN` bytes."""
-    files = sorted((ch.root / LOGS / str(sub.id)).glob("*.*"))
+    folder, each cut to its last `LOG_SHOWN` bytes. Without `with_scores`, the evaluation's standard output
+    (its summary: the scores) is left out."""
+    files = sorted(p for p in (ch.root / LOGS / str(sub.id)).glob("*.*") if with_scores or p.name != "evaluate.out")
     results = ch.root / RESULTS / str(sub.id)
     files += sorted(p for p in results.rglob("*.log") if p.is_file()) if results.is_dir() else []
     parts = []
