@@ -186,7 +186,8 @@ def create_app(settings: ServerSettings) -> Starlette:
 
     async def log(request: Request) -> Response:
         sub, organiser = ch.own(request, _sid(request), cookie=True)
-        return PlainTextResponse(_log_text(ch, sub, ch.board.visible(sub, organiser)))
+        hidden = ch.config.phase(sub.phase).hidden and not organiser
+        return PlainTextResponse(_log_text(ch, sub, hidden))
 
     async def board_json(request: Request) -> Response:
         ch.team(request)
@@ -317,14 +318,15 @@ def _phase_json(ch: Challenge, name: str) -> dict[str, Any]:
             "manifest_hash": ch.manifests[name], "published": len(ch.board.published(name))}
 
 
-def _log_text(ch: Challenge, sub: Submission, with_scores: bool) -> str:
+def _log_text(ch: Challenge, sub: Submission, hidden: bool) -> str:
     """The submission's logs: check-agent's and the evaluation's output and the policy logs in its results
-    folder, each cut to its last `LOG_SHOWN` bytes. Without `with_scores`, the evaluation's standard output
-    (its summary: the scores) is left out."""
-    files = sorted(p for p in (ch.root / LOGS / str(sub.id)).glob("*.*") if with_scores or p.name != "evaluate.out")
+    folder, each cut to its last `LOG_SHOWN` bytes. `hidden` (a hidden phase, shown to a team): check-agent's
+    logs only, since the evaluation's output holds scores the organiser may not publish, and what a policy
+    prints while it plays could carry the hidden split out."""
+    files = sorted(p for p in (ch.root / LOGS / str(sub.id)).glob("*.*") if not hidden or p.name.startswith("check."))
     results = ch.root / RESULTS / str(sub.id)
-    files += sorted(p for p in results.rglob("*.log") if p.is_file()) if results.is_dir() else []
-    parts = []
+    files += sorted(p for p in results.rglob("*.log") if p.is_file()) if results.is_dir() and not hidden else []
+    parts = ["(a hidden phase: the evaluation's logs are not shown, only check-agent's)"] if hidden else []
     for path in files:
         data = path.read_bytes()
         shown = data[-LOG_SHOWN:]

@@ -153,7 +153,7 @@ class Scheduler:
         if self._stop.is_set():
             return
         if code != 0:
-            self.store.move(sub.id, ("running",), "failed", reason=last_line(err) or f"evaluate exited {code}")
+            self.store.move(sub.id, ("running",), "failed", reason=error_line(err) or f"evaluate exited {code}")
             return
         summary = json.loads((out / "summary.json").read_text())
         if self.store.move(sub.id, ("running",), "scored", scores=scores_of(summary), detail="evaluated"):
@@ -253,6 +253,13 @@ def check_failure(code: int, out: str, err: str) -> str:
         if failed:
             return "check-agent failed: " + "; ".join(failed)
     return f"check-agent failed: {last_line(err) or f'exit code {code}'}"
+
+
+def error_line(text: str) -> str:
+    """The evaluator's own error line (`main-bench: error: ...`) in `text`, at most 300 characters; '' when
+    there is none (a line a policy printed is never taken for the reason)."""
+    lines = [line for line in text.splitlines() if line.startswith("main-bench: error: ")]
+    return lines[-1][:300] if lines else ""
 
 
 def last_line(text: str) -> str:

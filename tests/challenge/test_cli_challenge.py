@@ -47,3 +47,12 @@ def test_init_team_and_submit_refusals(cli, tmp_path):
     assert r.code == 2 and "cannot reach" in r.err and len(r.err.strip().splitlines()) == 1
     r = cli("submit", tmp_path, "--server", f"http://127.0.0.1:{port}", "--token", "t")
     assert r.code == 2 and "no policy.py" in r.err
+
+
+def test_a_failed_evaluation_reason_is_the_evaluators_line_never_the_policys():
+    from main_bench.challenge.queue import error_line
+
+    err = "a line the policy printed\nmain-bench: error: R: the policy failed 5 episodes in a row\nmain-bench: fake"
+    assert error_line(err) == "main-bench: error: R: the policy failed 5 episodes in a row"
+    assert error_line("main-bench: error: " + "x" * 1000) == ("main-bench: error: " + "x" * 1000)[:300]
+    assert error_line("only the policy's\nmain-bench:error: lookalike") == ""
