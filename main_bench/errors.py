@@ -52,3 +52,13 @@ class GenerationError(MainBenchError):
 
 class PolicyFailure(MainBenchError):
     """A policy failed so often that evaluation was stopped."""
+
+
+class ChallengeError(InputError):
+    """A challenge folder, upload or server request that cannot be accepted (bad archive, token, quota...).
+
+    `status` is the HTTP status the server answers with."""
+
+    def __init__(self, message: str, *, status: int = 400, path: str | Path | None = None) -> None:
+        self.status = status
+        super().__init__(message, path=path)

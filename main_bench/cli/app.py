@@ -41,7 +41,19 @@ def _root(
 
 
 def _register() -> None:
-    from . import bench, demo, episodes, evaluate, leaderboard, navmesh, scenes, stats, train, visualize
+    from . import (
+        bench,
+        challenge,
+        demo,
+        episodes,
+        evaluate,
+        leaderboard,
+        navmesh,
+        scenes,
+        stats,
+        train,
+        visualize,
+    )
 
     app.add_typer(scenes.app, name="scenes", short_help="Inspect scenes; generate and preview built-in houses.")
     app.add_typer(navmesh.app, name="navmesh", short_help="Build navmeshes and query geodesic distances.")
@@ -56,6 +68,7 @@ def _register() -> None:
     demo.register(app)
     bench.register(app)
     train.register(app)
+    challenge.register(app)
 
 
 _register()

@@ -65,6 +65,9 @@ def generate(
     max_rounds: int = typer.Option(8, "--max-rounds", help="Sampling rounds per shard before giving up."),
     shard_size: int = typer.Option(50_000, "--shard-size", help="Most episodes per shard file."),
     seed: int = typer.Option(0, "--seed", help="Seed of all randomness."),
+    secret_seed_file: Path | None = typer.Option(
+        None, "--secret-seed-file", help="Read the seed from this file (an integer, or hex of 32+ random bytes) "
+        "instead of --seed; the manifest records only its SHA-256 (a hidden challenge split)."),
     max_steps: int = typer.Option(500, "--max-steps", help="Task: max steps per agent (recorded)."),
     forward_step: float = typer.Option(0.25, "--forward-step", help="Task: move_forward distance (m)."),
     turn_angle: float = typer.Option(30.0, "--turn-angle", help="Task: turn_left/right angle (degrees)."),
@@ -98,6 +101,14 @@ def generate(
     check_up(up)
     refuse_output_over_inputs(out, {"--splits": splits, "--navmesh": navmesh, **{f"--scenes {s}": s for s in scenes}})
     width, height = _camera_size(camera)
+    secret = None
+    if secret_seed_file is not None:
+        from ..episodes.secret_seed import read_secret_seed
+
+        if seed != 0:
+            raise InputError(f"give --seed or --secret-seed-file, not both (got --seed {seed})")
+        secret = read_secret_seed(secret_seed_file)
+        seed = secret.seed
     settings = GenerationSettings(
         tasks=_tasks(task), agents=parse_int_list(agents, "--agents", 1, 8), per_scene=per_scene,
         min_distance=min_distance, max_distance=max_distance, success_distance=success_distance,
@@ -121,7 +132,7 @@ def generate(
     with progress("episodes", total, enabled=not (quiet or as_json)) as advance:
         report = generate_dataset(settings, sources, out, nav, executor=executor, workers=workers,
                                   ray_address=ray_address, overwrite=overwrite, cache_dir=nav_cache,
-                                  progress=advance)
+                                  progress=advance, seed_sha256=None if secret is None else secret.sha256)
     emit("episodes generate", report.to_json(), as_json, lambda d: report.render())
 
 

@@ -252,8 +252,12 @@ def _diff(a: Any, b: Any, prefix: str = "") -> list[str]:
 def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], out: str | Path,
                      navmesh_settings: Any, *, executor: Executor = "local", workers: int = 1,
                      ray_address: str | None = None, overwrite: bool = False, cache_dir: str | Path | None = None,
-                     progress: Callable[[int], None] | None = None) -> GenerationReport:
+                     progress: Callable[[int], None] | None = None,
+                     seed_sha256: str | None = None) -> GenerationReport:
     """Generate (or finish) the data set at `out` for `sources`; returns the run's report.
+
+    `seed_sha256`: `settings.seed` is a secret (`secret_seed.read_secret_seed`); the manifest then records this
+    commitment instead of the seed, and the seed is written nowhere in `out`.
 
     `navmesh_settings`: a `NavMeshSettings` (or its JSON dict). `cache_dir`: where built navmeshes are cached
     (None: built in every work unit). `progress(n)` is called with each finished unit's episode count.
@@ -266,7 +270,7 @@ def generate_dataset(settings: GenerationSettings, sources: list[SceneSource], o
         raise InputError(f"unknown executor {executor!r}; use local or ray")
     nav_json = navmesh_settings if isinstance(navmesh_settings, dict) else navmesh_settings.to_json()
     scenes = {s.scene_id: s.to_json() for s in sources}
-    ident = identity(settings, nav_json, scenes)
+    ident = identity(settings, nav_json, scenes, seed_sha256=seed_sha256)
     if out.exists() and not out.is_dir():
         raise InputError("--out must be a folder, this is a file", path=out)
     out.mkdir(parents=True, exist_ok=True)

@@ -64,6 +64,9 @@ class Manifest:
     navmesh_algorithm: int | None = None
     #: Per scene, the navmesh the data set was made with: {"path": relative path, "sha256": file hash}.
     navmeshes: dict[str, dict[str, str]] | None = None
+    #: SHA-256 of the secret seed file's text when the data set was generated from a secret seed; `seed` and
+    #: `settings.seed` then read 0 (the manifest records no seed).
+    seed_sha256: str | None = None
 
     def navmesh_mismatch(self) -> str:
         """Why the data set's distances are not this toolkit's navmesh's ('' when they are): it was made with
@@ -98,18 +101,24 @@ def folder_in_use(out: Path) -> InputError:
 
 
 def identity(settings: GenerationSettings, navmesh_settings: dict[str, Any], scenes: dict[str, dict],
-             navmesh_algorithm: int | None = None) -> dict:
+             navmesh_algorithm: int | None = None, seed_sha256: str | None = None) -> dict:
     """What must match for an existing (partial) data set to be resumed rather than refused.
 
     `navmesh_algorithm`: the navmesh build's algorithm version the distances come from (default: this
-    toolkit's), recorded so that a changed navmesh is seen.
+    toolkit's), recorded so that a changed navmesh is seen. `seed_sha256`: the commitment of a secret seed
+    (`secret_seed.py`); the seed itself is then left out (`settings.seed` null, `seed_secret` true).
     """
     if navmesh_algorithm is None:
         from ..navmesh.build import ALGORITHM_VERSION
 
         navmesh_algorithm = int(ALGORITHM_VERSION)
-    return {"schema_version": EPISODES_SCHEMA_VERSION, "settings": settings.to_json(),
-            "navmesh_settings": navmesh_settings, "navmesh_algorithm": navmesh_algorithm, "scenes": scenes}
+    settings_json = settings.to_json()
+    secret: dict[str, Any] = {}
+    if seed_sha256 is not None:
+        settings_json["seed"] = None
+        secret = {"seed_secret": True, "seed_sha256": seed_sha256}
+    return {"schema_version": EPISODES_SCHEMA_VERSION, "settings": settings_json,
+            "navmesh_settings": navmesh_settings, "navmesh_algorithm": navmesh_algorithm, "scenes": scenes, **secret}
 
 
 def build_manifest(ident: dict, shards: list[dict]) -> dict:
@@ -157,19 +166,22 @@ def read_manifest(path: str | Path) -> Manifest:
             f"{EPISODES_SCHEMA_VERSION} (success regions and the navmesh are not stored in it); regenerate it with "
             "`main-bench episodes generate` and the options recorded in its manifest, into a new --out", path=file)
     try:
-        settings = GenerationSettings.from_json(doc["settings"])
+        secret = doc.get("seed_secret") is True
+        settings = GenerationSettings.from_json({**doc["settings"], "seed": 0} if secret else doc["settings"])
         scenes = {sid: SceneEntry(scene_id=sid, split=e["split"], hash=e["hash"], source=e["source"],
                                   path=e.get("path"), up=e.get("up", "auto"))
                   for sid, e in doc["scenes"].items()}
         shards = tuple(ShardEntry(**s) for s in doc["shards"])
         return Manifest(root=file.parent, schema_version=int(doc["schema_version"]),
                         toolkit_version=str(doc.get("toolkit_version", "")), settings=settings,
-                        navmesh_settings=dict(doc["navmesh_settings"]), seed=int(doc["seed"]), scenes=scenes,
+                        navmesh_settings=dict(doc["navmesh_settings"]),
+                        seed=0 if secret else int(doc["seed"]), scenes=scenes,
                         shards=shards, shortfalls=tuple(doc.get("shortfalls", ())),
                         manifest_hash=sha256_file(file),
                         navmesh_algorithm=None if doc.get("navmesh_algorithm") is None
                         else int(doc["navmesh_algorithm"]),
-                        navmeshes={k: dict(v) for k, v in doc["navmeshes"].items()})
+                        navmeshes={k: dict(v) for k, v in doc["navmeshes"].items()},
+                        seed_sha256=str(doc["seed_sha256"]) if secret else None)
     except (KeyError, TypeError, ValueError, InputError) as exc:
         raise DatasetError(f"malformed manifest ({type(exc).__name__}: {exc}); regenerate the data set",
                            path=file) from None

@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import re
-import shutil
-import subprocess
 from pathlib import Path
 
 import lb_fixtures
 import numpy as np
 import pytest
 from lb_fixtures import make_results
-from mb_testing import need
+from mb_testing import chromium, console_lines
 from PIL import Image
 
 from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
@@ -23,19 +21,6 @@ EVIL = "<script>alert(1)</script>"
 PROBE = ("<script>window.addEventListener('error',function(e){var h=document.documentElement;"
          "h.setAttribute('data-errors',(h.getAttribute('data-errors')||'')+e.message+';')});"
          "window.alert=function(m){document.documentElement.setAttribute('data-alert',String(m))};</script>")
-
-
-def chromium(tmp: Path, *args: str) -> subprocess.CompletedProcess:
-    exe = shutil.which("chromium")
-    need(exe is not None, "the report test needs Debian's chromium (apt-get install chromium; .ci/run does)")
-    cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-           "--disable-background-networking", "--disable-component-update", "--disable-sync",
-           f"--user-data-dir={tmp / 'chromium-profile'}", "--enable-logging=stderr", "--v=0", *args]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=90)
-
-
-def console_lines(stderr: str) -> list[str]:
-    return [line for line in stderr.splitlines() if ":CONSOLE" in line or "Uncaught" in line]
 
 
 def with_probe(page: Path, out: Path) -> Path:
