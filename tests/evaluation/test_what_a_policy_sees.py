@@ -3,7 +3,7 @@
 Recording policies are played by the evaluator's own worker (`WorkerContext.run_chunk`, the path every
 submission's answers take) in `central`, `silent` and `comm` mode; every value they were handed is searched for
 an episode id and for the seeds derived from one, and what `reset` shows must be the same in every episode.
-The PettingZoo env (a training tool: its infos are the trainer's) must keep ids out of its observations.
+(The env's observations: tests/env/test_env_observations.py.)
 """
 
 from __future__ import annotations
@@ -146,27 +146,3 @@ def test_no_field_a_policy_sees_names_its_episode(tiny_dataset, tmp_path, mode):
                                                                                            "agent_0"))
     if mode == "comm":
         assert any(where.startswith("inbox") and value == 3 for where, value in log.seen)  # messages did arrive
-
-
-def test_the_env_observations_name_no_episode(tiny_dataset):
-    """The env is a training tool: its infos carry `episode_id` and privileged signals for the trainer, never
-    given to a policy at evaluation; its observations (what a policy trained on it sees) carry no id."""
-    from main_bench.env import create
-
-    dataset, cache = tiny_dataset
-    env = create(dataset, split="val", agents=2, task="shared", renderer="tiny", image_size=16, cache_dir=cache,
-                 message_floats=2)
-    try:
-        seen = []
-        for seed in range(3):
-            observations, infos = env.reset(seed=seed)
-            assert all("episode_id" in info for info in infos.values())  # the trainer's
-            seen += _leaves(observations, "observations")
-            observations, *_ = env.step({a: {"action": 1, "message": np.ones(2, np.float32), "to": -1}
-                                         for a in env.agents})
-            seen += _leaves(observations, "observations")
-            for obs in observations.values():
-                assert set(obs) <= {"rgb", "depth", "target", "contact", "gps_compass", "inbox"}
-    finally:
-        env.close()
-    _assert_names_no_episode(seen, _ids(dataset))
