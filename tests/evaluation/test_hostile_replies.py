@@ -270,3 +270,18 @@ def test_evaluate_fails_forged_messages_per_episode_and_resumes(tiny_dataset, tm
                                   .reset_index(drop=True),
                                   _read(settings.out, "records").sort_values(["task", "episode_id", "agent_index"])
                                   .reset_index(drop=True))
+
+
+def test_forged_probe_replies_fail_check_agents_isolation_check_without_an_error():
+    """check-agent's escape probe runs in the policy's process too: a reply of the wrong shape is a failure."""
+    from main_bench.evaluation.process.isolation_check import Trap
+
+    rng = np.random.default_rng(36)
+    with Trap() as trap:
+        for _ in range(300):
+            reply = {k: _value(rng) for k in ("succeeded", "interfaces", "environment") if rng.random() < 0.7}
+            verdict = trap.verdict(reply if rng.random() < 0.9 else _value(rng), None)
+            assert all(isinstance(e, str) for e in verdict.escapes)
+        assert trap.verdict({"succeeded": "x"}, None).escapes == ("sent an unreadable probe reply (succeeded is str)",)
+        assert trap.verdict({"environment": []}, None).escapes == (
+            "sent an unreadable probe reply (environment is list)",)
