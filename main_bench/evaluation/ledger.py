@@ -24,11 +24,13 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ResultsError
 from ..io import atomic_write_json, check_schema_version, read_json, sha256_file
+from .records import partition_dir
 
 if TYPE_CHECKING:
     from .run.chunks import Chunk
@@ -39,6 +41,7 @@ SEAL_FILE = "ledger/run.json"
 #: The first results schema (`records.RESULTS_SCHEMA_VERSION`) whose folders carry a seal.
 SEALED_SINCE = 4
 PART_KINDS: tuple[str, ...] = ("records", "trajectories")
+_CHUNK_KEY = re.compile(r"([^/#]+)/([^/#]+)/([0-9]{1,3})#([0-9]{1,9})")
 
 
 def write_entry(out: Path, chunk: Chunk, paths: list[Path]) -> None:
@@ -202,9 +205,13 @@ def _check_coverage(root: Path, summary: dict[str, Any], summary_path: Path, dig
     covered: dict[str, str] = {}
     tracks: dict[str, list[str]] = {}
     for chunk in chunks:
-        track, _, part = chunk["key"].partition("#")
-        split, task, agents = (track.split("/") + ["", "", ""])[:3]
-        entry = root / "ledger" / f"split={split}" / f"task={task}" / f"agents={agents}" / f"part-{int(part):05d}.json"
+        found = _CHUNK_KEY.fullmatch(chunk["key"])
+        if found is None:
+            raise ResultsError(f"run seal lists a chunk {_short(chunk['key'])}, not <split>/<task>/<agents>#<part>; "
+                               "evaluate again into a new --out", path=root / SEAL_FILE)
+        split, task, agents, part = found.groups()
+        track = f"{split}/{task}/{agents}"
+        entry = partition_dir(root, "ledger", split, task, int(agents)) / f"part-{int(part):05d}.json"
         if not entry.is_file():
             raise ResultsError(f"chunk {chunk['key']} of the run's seal has no ledger entry: episodes are missing "
                                "from the results; evaluate again (same --out resumes it)", path=root)

@@ -156,3 +156,13 @@ def test_results_without_a_seal_are_refused(run, tmp_path):
     _edit(copy, _set("schema_version", 3))
     with pytest.raises(ResultsError, match="results schema 3, before 4"):
         load_results(copy)
+
+
+@pytest.mark.parametrize("key", ["val/shared/2", "val/shared/two#0", "../x#1", 5])
+def test_a_malformed_seal_is_one_line(run, tmp_path, key):
+    copy = _copy(run, tmp_path)
+    seal = json.loads((copy / "ledger" / "run.json").read_text())
+    seal["chunks"][0]["key"] = key
+    (copy / "ledger" / "run.json").write_text(json.dumps(seal))
+    with pytest.raises(ResultsError, match="run seal"):
+        load_results(copy)
