@@ -174,7 +174,7 @@ def verify_seal(root: Path, summary: dict[str, Any], summary_path: Path) -> None
         raise ResultsError("run seal has no identity and chunk list; evaluate again into a new --out",
                            path=seal_path)
     for field, found, sealed in _identity_fields(summary, identity):
-        if found != sealed:
+        if not _same(found, sealed):
             raise ResultsError(f"summary.json's {field} ({_short(found)}) is not the run's sealed {field} "
                                f"({_short(sealed)}): the summary was edited after the run; evaluate again into a "
                                "new --out", path=summary_path)
@@ -230,14 +230,19 @@ def _check_coverage(root: Path, summary: dict[str, Any], summary_path: Path, dig
     for key in sorted(set(tracks) | set(scored)):
         track = scored.get(key)
         ids = track.get("episode_ids") if isinstance(track, dict) else None
-        if ids != sorted(tracks.get(key, [])):
+        if not _same(ids, sorted(tracks.get(key, []))):
             raise ResultsError(f"summary.json's tracks[{key!r}].episode_ids are not the run's sealed episodes: the "
                                "summary was edited after the run; evaluate again into a new --out",
                                path=summary_path)
     counts = summary.get("counts") if isinstance(summary.get("counts"), dict) else {}
-    if counts.get("episodes") != sum(len(v) for v in tracks.values()):
+    if not _same(counts.get("episodes"), sum(len(v) for v in tracks.values())):
         raise ResultsError(f"summary.json's counts.episodes ({_short(counts.get('episodes'))}) is not the number "
                            "of sealed episodes: the summary was edited after the run", path=summary_path)
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal as JSON, types included (`false` is not `0`, `1` is not `1.0`)."""
+    return json.dumps(a, sort_keys=True, default=str) == json.dumps(b, sort_keys=True, default=str)
 
 
 def _short(value: Any) -> str:

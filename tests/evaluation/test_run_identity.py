@@ -67,6 +67,8 @@ def test_a_fresh_run_verifies_and_builds(run, cli, tmp_path):
     ("settings.mode", "comm"),
     ("settings.message_floats", 4096),
     ("settings.sandbox", True),
+    ("settings.sandbox", 0),
+    ("settings.seed", 0.0),
     ("settings.seed", 7),
     ("settings.split", "test"),
     ("settings.track", "gps"),
