@@ -22,7 +22,9 @@ the team succeeded. An agent is *terminated* when it called `found` or the episo
 Infos per agent: `episode_id`, `task`, `distance_to_goal` (geodesic metres to its target's success region),
 `collided`, `success` (its correct `found`), `in_success_region` (it stands where a `found` would be correct:
 a training signal, e.g. for `train run --found-aux`; the evaluator never shows it to a policy), and
-`team_success` on the step that ends the episode.
+`team_success` on the step that ends the episode. Infos are the trainer's, not a policy's: the evaluator never
+gives a policy an episode id or any of these signals (docs/evaluation.md, "Run identity and what a policy
+sees"), so a policy must act on its observations (and inbox) alone; observations carry no episode id.
 
 Each `reset` draws an episode from the env's generator (seeded by `reset(seed=...)`), or plays
 `options={"episode_id": ...}`.

@@ -96,7 +96,8 @@ def _as_failure():
 
 
 def agent_info(info: EpisodeInfo, index: int, mode: str, message_floats: int) -> AgentInfo:
-    """What agent `index` is told at reset: its own target only, and its own seed (from the episode seed)."""
+    """What agent `index` is told at reset: its own target only, and its own seed (a hash of the team's seed and
+    its id: per run and agent for a submission, never per episode)."""
     aid = info.agent_ids[index]
     return AgentInfo(agent_id=aid, agent_ids=info.agent_ids, task=info.task, track=info.track,
                      target=info.targets[aid], max_steps=info.max_steps, seed=episode_seed(info.seed, aid),

@@ -15,6 +15,7 @@ is an error.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -90,24 +91,34 @@ def describe_message(message: Any) -> dict[str, Any] | None:
     return {"to": to, **_describe_data(message)}
 
 
-def check_message(sender: str, described: dict[str, Any] | None, ids: tuple[str, ...],
-                  message_floats: int) -> Message | None:
-    """The checked message of agent `sender`, or None when it sent nothing; raises `MessageError`."""
+#: The keys a message description may have (`describe_message`).
+DESCRIPTION_KEYS = frozenset({"to", "values", "length", "bad", "bad_to"})
+
+
+def check_message(sender: str, described: Any, ids: tuple[str, ...], message_floats: int) -> Message | None:
+    """The checked message of agent `sender`, or None when it sent nothing; raises `MessageError`.
+
+    `described` comes from the policy's process and is checked by type before use: a description
+    `describe_message` could not have written (unknown keys, non-numeric `values`, a `length` that is not a
+    non-negative integer, an address that is neither an id nor an index) fails the episode like a bad message.
+    """
     if described is None:
         return None
-    if not isinstance(described, dict):
-        raise MessageError(f"invalid_message: {sender} sent an unreadable message description")
+    if not isinstance(described, dict) or not set(described) <= DESCRIPTION_KEYS:
+        raise MessageError(f"invalid_message: {sender} sent an unreadable message description "
+                           f"{_shown(described)}")
     if "bad_to" in described:
-        bad = described["bad_to"]
-        raise MessageError(f"invalid_message: {sender} addressed {bad.get('repr')} ({bad.get('type')}); use a "
+        bad = _marker_fields(described["bad_to"])
+        raise MessageError(f"invalid_message: {sender} addressed {bad['repr']} ({bad['type']}); use a "
                            f"teammate's id such as {ids[0]!r}, its index, or no 'to' for everyone")
     if "bad" in described:
-        bad = described["bad"]
-        what = f"{bad.get('repr')} ({bad.get('type')}"
-        what += f", dtype {bad['dtype']}, shape {tuple(bad['shape'])})" if "dtype" in bad else ")"
+        bad = _marker_fields(described["bad"])
+        what = f"{bad['repr']} ({bad['type']}"
+        what += f", dtype {bad['dtype']}, shape {bad['shape']})" if "dtype" in bad else ")"
         raise MessageError(f"invalid_message: {sender} sent {what}; send a 1-D vector of real numbers, "
                            "None, or {'to': agent_id, 'data': vector}")
-    length = int(described["length"]) if "length" in described else len(described.get("values") or [])
+    data = _described_values(sender, described)
+    length = described.get("length", data.size)
     if length and message_floats == 0:
         raise MessageError(f"invalid_message: {sender} sent {length} values in silent mode, where no messages are "
                            "allowed; return (action, None) or evaluate with --mode comm")
@@ -115,7 +126,9 @@ def check_message(sender: str, described: dict[str, Any] | None, ids: tuple[str,
         raise MessageError(f"invalid_message: {sender} sent {length} floats, more than message_floats="
                            f"{message_floats} ({message_floats * MESSAGE_VALUE_BYTES} bytes); send at most "
                            f"{message_floats}")
-    data = np.asarray(described.get("values") or [], dtype=np.float32)
+    if length != data.size:  # a length is only described for a message too long to copy
+        raise MessageError(f"invalid_message: {sender} sent an unreadable message description (length {length} "
+                           f"with {data.size} values)")
     if not np.isfinite(data).all():
         bad_at = int(np.flatnonzero(~np.isfinite(data))[0])
         raise MessageError(f"invalid_message: {sender} sent a non-finite value {float(data[bad_at])} at index "
@@ -126,12 +139,52 @@ def check_message(sender: str, described: dict[str, Any] | None, ids: tuple[str,
     return Message(data, to)
 
 
+def _described_values(sender: str, described: dict[str, Any]) -> np.ndarray:
+    """The float32 values of a description, its `length` checked to be an integer; raises `MessageError`."""
+    length = described.get("length", 0)
+    if isinstance(length, bool) or not isinstance(length, int) or length < 0:
+        raise MessageError(f"invalid_message: {sender} sent an unreadable message description (length "
+                           f"{_shown(length)})")
+    values = described.get("values")
+    if values is None:
+        values = []
+    if not isinstance(values, list) or len(values) > DESCRIBE_LIMIT or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in values):
+        raise MessageError(f"invalid_message: {sender} sent an unreadable message description (values "
+                           f"{_shown(values)}); send a 1-D vector of real numbers")
+    with np.errstate(over="ignore"):
+        return np.array([v if isinstance(v, float) or abs(v) < 2**128 else math.inf * (1 if v > 0 else -1)
+                         for v in values], dtype=np.float64).astype(np.float32)
+
+
+def _marker_fields(marker: Any) -> dict[str, str]:
+    """A `_marker` from the policy's side as short text fields, whatever was sent."""
+    fields = marker if isinstance(marker, dict) else {"repr": marker}
+    out = {"type": _clip(fields.get("type", "?")), "repr": _clip(fields.get("repr", "?"))}
+    if "dtype" in fields:
+        out["dtype"] = _clip(fields["dtype"])
+        shape = fields.get("shape")
+        out["shape"] = _clip(tuple(shape) if isinstance(shape, list) else shape)
+    return out
+
+
+def _clip(value: Any) -> str:
+    text = value if isinstance(value, str) else repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _shown(value: Any) -> str:
+    return f"{_clip(value)} ({type(value).__name__})"
+
+
 def _recipient(sender: str, to: Any, ids: tuple[str, ...]) -> int:
     if to is None:
         return BROADCAST
-    index = ids.index(to) if isinstance(to, str) and to in ids else (to if isinstance(to, int) else None)
+    index = ids.index(to) if isinstance(to, str) and to in ids else (
+        to if isinstance(to, int) and not isinstance(to, bool) else None)
     if index is None or not 0 <= index < len(ids):
-        raise MessageError(f"invalid_message: {sender} addressed {to!r}, which is not in the team "
+        shown = repr(_clip(to)) if isinstance(to, str) else _clip(to)
+        raise MessageError(f"invalid_message: {sender} addressed {shown}, which is not in the team "
                            f"({', '.join(ids)})")
     return int(index)
 

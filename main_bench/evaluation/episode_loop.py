@@ -32,8 +32,17 @@ class EpisodeFailure(Exception):
 
 
 def episode_seed(seed: int, episode_id: str) -> int:
-    """The seed of one episode: a stable hash of the evaluation seed and the episode id (63 bits)."""
+    """The evaluator's seed of one episode (the simulator's, and the privileged baselines', which see the World
+    anyway): a stable hash of the evaluation seed and the episode id (63 bits). Never given to a submission."""
     digest = hashlib.sha256(f"{int(seed)}\0{episode_id}".encode()).digest()
+    return int.from_bytes(digest[:8], "little") >> 1
+
+
+def policy_seed(seed: int) -> int:
+    """The seed a submitted policy gets in every episode of a run (`EpisodeInfo.seed`): a hash of the evaluation
+    seed alone (63 bits), the same for every episode, so that it names none and a policy's draws do not depend
+    on which worker played which episode."""
+    digest = hashlib.sha256(f"policy\0{int(seed)}".encode()).digest()
     return int.from_bytes(digest[:8], "little") >> 1
 
 
@@ -201,12 +210,14 @@ def run_episode(episode: Episode, sim: Any, fields: list[Any], policy: Any, loop
     n = episode.num_agents
     ids = agent_ids(n)
     judge = EpisodeJudge(loop.rules, n)
+    own_seed = episode_seed(seed, episode.episode_id)
+    # What a submission is told names no episode (docs/evaluation.md, "Run identity and what a policy sees").
     info = EpisodeInfo(agent_ids=ids, task=loop.rules.task, track=loop.track,  # type: ignore[arg-type]
                        targets=target_infos(episode), max_steps=loop.rules.max_steps,
-                       seed=episode_seed(seed, episode.episode_id), extra={"episode_id": episode.episode_id})
+                       seed=own_seed if privileged else policy_seed(seed))
     targets = target_observations(episode)
     sim.reset(np.asarray(episode.start_positions, dtype=np.float64), np.asarray(episode.start_yaws, dtype=np.float64),
-              seed=info.seed)
+              seed=own_seed)
     positions = np.asarray(sim.positions, dtype=np.float64)
     yaws = np.asarray(sim.yaws, dtype=np.float64)
     collided = np.zeros(n, dtype=bool)

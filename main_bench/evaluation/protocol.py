@@ -42,7 +42,11 @@ class TargetInfo:
 
 @dataclass(frozen=True)
 class EpisodeInfo:
-    """Given to `TeamPolicy.reset` at the start of every episode."""
+    """Given to `TeamPolicy.reset` at the start of every episode.
+
+    Nothing in it names the episode: `seed` is the run's policy seed (`episode_loop.policy_seed`, a hash of the
+    evaluation seed, the same in every episode of a run) and `extra` is empty during evaluation.
+    """
 
     agent_ids: tuple[str, ...]
     task: Literal["shared", "individual"]
@@ -115,7 +119,8 @@ class AgentInfo:
     """Given to `AgentPolicy.reset` at the start of every episode: what one agent may know.
 
     `agent_id` is this agent, `agent_ids` the whole team (the addresses a message may name), `target` only its
-    own target. `seed` is this agent's episode seed (derived from the episode seed and its id). `message_floats`
+    own target. `seed` is this agent's seed (a hash of the run's policy seed and its id, the same in every episode
+    of a run: nothing given to a policy names an episode). `message_floats`
     is the largest message it may send (0 in `silent` mode).
     """
 

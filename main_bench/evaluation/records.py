@@ -19,8 +19,9 @@ from ..io import atomic_path
 
 #: Version of the records, trajectories and summary.json; readers refuse a newer one. 2: summary.json carries
 #: `files` (SHA-256 of every part) and settings.sandbox; 3: distances to success regions, intervals resampling
-#: episodes with Wilson intervals for success, the scored episode ids listed.
-RESULTS_SCHEMA_VERSION = 3
+#: episodes with Wilson intervals for success, the scored episode ids listed; 4: the run's identity and chunks
+#: sealed in `ledger/run.json` and checked against summary.json (`ledger.verify_seal`).
+RESULTS_SCHEMA_VERSION = 4
 TEAM = -1
 
 RECORD_SCHEMA = pa.schema(

@@ -3,7 +3,8 @@
 `summary.json` holds: `schema_version`, `toolkit_version`, `submission` (name, description, links, date,
 baseline, spec), `dataset` (path, manifest_hash), `settings` (with `sandbox`: false for `--no-sandbox`),
 `counts`, `tracks`: for each `<split>/<task>/<agents>` key, each team metric's `{mean, ci_low, ci_high}` and
-the episode count, and `files`: the SHA-256 of every part file, checked by `load_results` (`ledger.py`).
+the episode count, and `files`: the SHA-256 of every part file. `load_results` checks the files against those
+hashes and the summary against the run's seal `ledger/run.json` (identity and chunks; `ledger.verify_seal`).
 """
 
 from __future__ import annotations

@@ -20,7 +20,14 @@ from .. import __version__
 from ..errors import DatasetError, ResultsError, SubmissionError
 from ..io import atomic_write_json, folder_lock, read_json
 from .baselines import privileged_baseline
-from .ledger import PART_KINDS, remove_unfinished_writes, verified_files
+from .ledger import (
+    PART_KINDS,
+    remove_unfinished_writes,
+    seal_digest,
+    seal_document,
+    verified_files,
+    write_seal,
+)
 from .run.chunks import Chunk, make_chunks
 from .scoring.task_rules import rules_json
 from .settings import EvalSettings, SubmissionMeta
@@ -102,7 +109,14 @@ def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
     # simulator and target fields, and consecutive chunks go to the same worker (see `executors.run_local`);
     # within a scene the heaviest first, so that the chunks idle workers take from the ends of blocks are light.
     chunks.sort(key=lambda c: (scene_of[c.episode_ids[0]], -c.weight, c.task, c.agents, c.part))
-    return manifest, chunks
+    seal = seal_digest(seal_document(sealed_identity(settings, manifest), chunks))
+    return manifest, [replace(c, seal=seal) for c in chunks]
+
+
+def sealed_identity(settings: EvalSettings, manifest: Any) -> dict[str, Any]:
+    """The run identity the ledger seals (`ledger.seal_document`): the settings' identity, the data set's
+    manifest hash and its task rules, as JSON."""
+    return {**settings.identity(), "manifest_hash": manifest.manifest_hash, "task_rules": rules_json(manifest)}
 
 
 def submission_meta(settings: EvalSettings) -> SubmissionMeta:
@@ -256,6 +270,7 @@ def write_summary(settings: EvalSettings, manifest: Any, chunks: list[Chunk]) ->
     from .scoring.summary import build_summary
 
     files = verified_files(out, chunks)
+    write_seal(out, seal_document(sealed_identity(settings, manifest), chunks))
     records = _read(out, "records", files=[out / rel for rel in files])
     keys = {(c.split, c.task, c.agents) for c in chunks}
     if not records.empty:

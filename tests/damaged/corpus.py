@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 import trimesh
+from mb_testing import seal_results
 
 from main_bench.cli.app import main
 from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
 from main_bench.episodes.shards import write_shard
-from main_bench.evaluation.ledger import file_hashes
 from main_bench.evaluation.records import (
     RECORD_SCHEMA,
     RESULTS_SCHEMA_VERSION,
@@ -101,7 +101,7 @@ def make_results(root: Path, dataset: Path) -> Path:
     from main_bench.episodes.dataset import load_table
 
     table = load_table(dataset).to_pylist()
-    written = []
+    parts = {}
     for split, task, n in TRACKS:
         eps = [e for e in table if e["task"] == task and e["agents"] == n]
         recs, traj = [], []
@@ -117,16 +117,14 @@ def make_results(root: Path, dataset: Path) -> Path:
                               x=x + 0.25 * t, y=y, z=z, yaw=0.0, collided=False, distance_to_goal=1.0,
                               message_bytes=0, message_to=-2)
                          for t in range(5)]
-        written.append(write_part(root, "records", split, task, n, 0,
-                                  pa.Table.from_pylist(recs, schema=RECORD_SCHEMA)))
-        written.append(write_part(root, "trajectories", split, task, n, 0,
-                                  pa.Table.from_pylist(traj, schema=TRAJECTORY_SCHEMA)))
+        parts[(split, task, n)] = ([ep["episode_id"] for ep in eps], [
+            write_part(root, "records", split, task, n, 0, pa.Table.from_pylist(recs, schema=RECORD_SCHEMA)),
+            write_part(root, "trajectories", split, task, n, 0, pa.Table.from_pylist(traj, schema=TRAJECTORY_SCHEMA))])
     summary = {"schema_version": RESULTS_SCHEMA_VERSION, "toolkit_version": "corpus",
-               "files": file_hashes(root, written),
                "submission": {"name": "corpus", "description": "", "links": [], "date": "", "baseline": False},
                "dataset": {"path": str(dataset), "manifest_hash": sha256_file(dataset / "manifest.json")},
                "settings": {}, "counts": {}, "tracks": {}}
-    (root / "summary.json").write_text(json.dumps(summary))
+    seal_results(root, summary, parts)
     return root
 
 

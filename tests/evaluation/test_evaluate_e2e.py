@@ -19,6 +19,7 @@ import pytest
 
 from main_bench.episodes.dataset import load_episodes
 from main_bench.errors import DatasetError, PolicyFailure
+from main_bench.evaluation.episode_loop import target_observations
 from main_bench.evaluation.records import TEAM
 from main_bench.evaluation.results import _read, load_results
 from main_bench.evaluation.runner import evaluate
@@ -255,6 +256,11 @@ def test_data_set_from_another_navmesh_algorithm_is_refused(cli, tiny_dataset, t
     assert not (tmp_path / "r").exists()
 
 
+def _fingerprint(target) -> str:
+    """by_episode.py's key of an episode: agent_0's first target observation (no episode id reaches a policy)."""
+    return ",".join(f"{float(v):.3f}" for v in np.atleast_1d(np.asarray(target)))
+
+
 def _hostile(tmp_path: Path, modes: dict[str, str]) -> str:
     folder = tmp_path / "hostile"
     folder.mkdir()
@@ -264,8 +270,12 @@ def _hostile(tmp_path: Path, modes: dict[str, str]) -> str:
 
 
 def test_hostile_policy_fails_only_its_episodes_with_the_reason(tiny_dataset, tmp_path):
-    ids = [e.episode_id for e in load_episodes(tiny_dataset[0], "val", "shared", 2)]
-    modes = dict(zip(ids, ["raise", "ok", "hang", "garbage", "nan", "exit", "memory", "ok"], strict=True))
+    episodes = load_episodes(tiny_dataset[0], "val", "shared", 2)
+    keys = [_fingerprint(target_observations(e)[0]) for e in episodes]
+    assert len(set(keys)) == len(keys)
+    by_id = dict(zip([e.episode_id for e in episodes], ["raise", "ok", "hang", "garbage", "nan", "exit", "memory",
+                                                          "ok"], strict=True))
+    modes = {key: by_id[e.episode_id] for key, e in zip(keys, episodes, strict=True)}
     limits = PolicyLimits(step_seconds=8.0, episode_seconds=60.0, memory_mb=384)
     settings = _settings(tiny_dataset, tmp_path / "out", agent=_hostile(tmp_path, modes), tasks=("shared",),
                          limit=8, chunk_size=8, limits=limits, max_consecutive_failures=8)
@@ -276,7 +286,7 @@ def test_hostile_policy_fails_only_its_episodes_with_the_reason(tiny_dataset, tm
                 "garbage": "invalid_action: agent_0 returned 'left' (str)",
                 "nan": "invalid_action: agent_0 returned nan (float)", "exit": "dead: exit code 3",
                 "memory": "memory: MemoryError in act", "ok": ""}
-    for episode_id, mode in modes.items():
+    for episode_id, mode in by_id.items():
         reason = team.loc[episode_id, "failure"]
         assert reason.startswith(expected[mode]) if mode != "ok" else reason == "", (mode, reason)
         if mode != "ok":
@@ -287,8 +297,8 @@ def test_hostile_policy_fails_only_its_episodes_with_the_reason(tiny_dataset, tm
 
 
 def test_repeated_failure_stops_with_a_clear_report(tiny_dataset, tmp_path, cli):
-    ids = [e.episode_id for e in load_episodes(tiny_dataset[0], "val", "shared", 2)]
-    agent = _hostile(tmp_path, dict.fromkeys(ids, "raise"))
+    episodes = load_episodes(tiny_dataset[0], "val", "shared", 2)
+    agent = _hostile(tmp_path, {_fingerprint(target_observations(e)[0]): "raise" for e in episodes})
     settings = _settings(tiny_dataset, tmp_path / "out", agent=agent, tasks=("shared",), limit=8,
                          max_consecutive_failures=3)
     with pytest.raises(PolicyFailure) as err:

@@ -6,18 +6,17 @@ results write_part + summary.json); the tests recompute every expected number fr
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from mb_testing import seal_results
 
 from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
-from main_bench.evaluation.ledger import file_hashes
 from main_bench.evaluation.records import (
     RECORD_SCHEMA,
     RESULTS_SCHEMA_VERSION,
@@ -93,12 +92,13 @@ def read_episode_rows(dataset: Path) -> list[dict]:
 def make_results(root: Path, dataset: Path, name: str, skill: float, *, baseline: bool = False,
                  manifest_hash: str = "f" * 64, seed: int = 0, description: str = "fixture policy",
                  links: tuple[str, ...] = ("https://example.org/method",), mode: str = "",
-                 bytes_per_step: int = 0) -> Path:
+                 bytes_per_step: int = 0, task_rules: dict | None = None) -> Path:
     """A results directory for `dataset`: per-agent and team records plus straight-line trajectories.
 
     `skill` is the chance that an agent reaches its target; failed agents stop halfway and get success 0.
     `mode` is recorded in the settings (empty: none recorded, as in results older than the modes); with
-    `bytes_per_step` every agent sends a message of that many bytes each step.
+    `bytes_per_step` every agent sends a message of that many bytes each step; `task_rules` as evaluate records
+    them (none: as in results older than the rules).
     """
     rng = np.random.default_rng(seed)
     by_part: dict[tuple, list] = {}
@@ -142,19 +142,20 @@ def make_results(root: Path, dataset: Path, name: str, skill: float, *, baseline
                     x=p[0], y=p[1], z=p[2], yaw=0.0, collided=False, distance_to_goal=0.0,
                     message_bytes=bytes_per_step if 0 < t <= steps[i] else 0,
                     message_to=-1 if bytes_per_step and 0 < t <= steps[i] else -2))
-    written = []
+    parts = {}
     for (split, task, n), rows in by_part.items():
-        written.append(write_part(root, "records", split, task, n, 0,
-                                  pa.Table.from_pylist(rows, schema=RECORD_SCHEMA)))
-        written.append(write_part(root, "trajectories", split, task, n, 0,
-                                  pa.Table.from_pylist(traj_part[(split, task, n)], schema=TRAJECTORY_SCHEMA)))
+        written = [write_part(root, "records", split, task, n, 0, pa.Table.from_pylist(rows, schema=RECORD_SCHEMA)),
+                   write_part(root, "trajectories", split, task, n, 0,
+                              pa.Table.from_pylist(traj_part[(split, task, n)], schema=TRAJECTORY_SCHEMA))]
+        parts[(split, task, n)] = (sorted({r["episode_id"] for r in rows}), written)
     summary = {"schema_version": RESULTS_SCHEMA_VERSION, "toolkit_version": "fixture",
-               "files": file_hashes(root, written),
                "submission": {"name": name, "description": description, "links": list(links),
                               "date": "2026-11-01", "baseline": baseline},
                "dataset": {"path": str(dataset), "manifest_hash": manifest_hash},
                "settings": {"mode": mode} if mode else {}, "counts": {}, "tracks": {}}
-    (root / "summary.json").write_text(json.dumps(summary))
+    if task_rules is not None:
+        summary["task_rules"] = task_rules
+    seal_results(root, summary, parts)
     return root
 
 

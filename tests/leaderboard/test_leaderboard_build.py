@@ -13,6 +13,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 from lb_fixtures import make_results
+from mb_testing import rehash_part
 from PIL import Image
 
 from main_bench.errors import ResultsError
@@ -232,24 +233,23 @@ def test_records_that_appear_twice_are_refused(tmp_path, episodes_dir):
     summary = json.loads((r / "summary.json").read_text())  # a merged folder whose summary lists both copies
     summary["files"][copy.relative_to(r).as_posix()] = sha256_file(copy)
     (r / "summary.json").write_text(json.dumps(summary))
+    with pytest.raises(ResultsError, match="files differ from the run's ledger entries"):
+        build_leaderboard([r], tmp_path / "lb", FAST)
+    rehash_part(r, copy, like=part)  # its ledger entry lists both copies too
     with pytest.raises(ResultsError, match="appear twice"):
         build_leaderboard([r], tmp_path / "lb", FAST)
 
 
-def _with_rules(results: Path, success: float, steps: int) -> Path:
-    """Give a fixture's summary.json the `task_rules` that evaluate records from the data set's manifest."""
-    doc = json.loads((results / "summary.json").read_text())
-    doc["task_rules"] = {"success_distance": success, "max_steps": steps, "goal_radius": 0.5, "agent_radius": 0.18,
-                         "agent_height": 1.5, "max_climb": 0.2, "forward_step": 0.25, "turn_angle_deg": 30.0,
-                         "camera": {"width": 128, "height": 128, "hfov_deg": 90.0, "height_m": 1.25,
-                                    "max_depth": 10.0}}
-    (results / "summary.json").write_text(json.dumps(doc))
-    return results
+def _rules(success: float, steps: int) -> dict:
+    """The `task_rules` that evaluate records in summary.json from the data set's manifest."""
+    return {"success_distance": success, "max_steps": steps, "goal_radius": 0.5, "agent_radius": 0.18,
+            "agent_height": 1.5, "max_climb": 0.2, "forward_step": 0.25, "turn_angle_deg": 30.0,
+            "camera": {"width": 128, "height": 128, "hfov_deg": 90.0, "height_m": 1.25, "max_depth": 10.0}}
 
 
 def test_each_section_shows_its_task_rules(tmp_path, episodes_dir):
-    a = _with_rules(make_results(tmp_path / "a", episodes_dir, "Method A", 0.6, manifest_hash="a" * 64), 1.0, 500)
-    b = _with_rules(make_results(tmp_path / "b", episodes_dir, "Method B", 0.6, manifest_hash="b" * 64), 1.5, 300)
+    a = make_results(tmp_path / "a", episodes_dir, "Method A", 0.6, manifest_hash="a" * 64, task_rules=_rules(1.0, 500))
+    b = make_results(tmp_path / "b", episodes_dir, "Method B", 0.6, manifest_hash="b" * 64, task_rules=_rules(1.5, 300))
     report = build_leaderboard([a, b], tmp_path / "lb", LeaderboardSettings(allow_mixed=True, plots=False, pictures=0,
                                                                             tables=TableSettings(n_resamples=200)))
     page, readme = report.index_html.read_text(), report.readme_md.read_text()

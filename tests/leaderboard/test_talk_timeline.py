@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import json
-
 import lb_fixtures
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 from lb_fixtures import make_results
+from mb_testing import rehash_part
 
-from main_bench.evaluation.ledger import file_hashes
 from main_bench.leaderboard.episode_view import load_episode_view
 from main_bench.leaderboard.talk import has_messages
 from main_bench.leaderboard.visualize import episode_figure, episode_png
@@ -28,9 +26,7 @@ def test_timeline_ticks_are_the_messages_of_the_trajectory(tmp_path, episodes_di
     addressed = mine & (frame["agent_index"] == 1) & (frame["step"] == 2)
     frame.loc[addressed, "message_to"] = 0  # one message to a single teammate
     pq.write_table(pa.Table.from_pandas(frame, schema=table.schema, preserve_index=False), part)
-    summary = json.loads((res / "summary.json").read_text())  # results are hash-checked: record the new part's
-    summary["files"].update(file_hashes(res, [part]))
-    (res / "summary.json").write_text(json.dumps(summary))
+    rehash_part(res, part)  # results are hash-checked: record the new part's hash
     view = load_episode_view(res, episode, with_scene=False)
     assert has_messages(view)
     fig, _ = episode_figure(view)

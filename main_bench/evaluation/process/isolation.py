@@ -70,10 +70,12 @@ class Limits:
 class PolicyError(MainBenchError):
     """The policy failed this call; `reason` (`kind: detail`) is what the results record."""
 
-    def __init__(self, reason: str, details: str = "") -> None:
+    def __init__(self, reason: str, details: str = "", stop: bool = False) -> None:
         super().__init__(reason)
         self.reason = reason
         self.details = details
+        #: the process can no longer be trusted to answer in step (`check_reply`): it is to be stopped
+        self.stop = stop
 
     @property
     def kind(self) -> str:
@@ -141,7 +143,10 @@ class PolicyProcess:
         """The first half of `reset`: send the request; `receive()` waits for the answer. Lets an evaluator
         start several processes' resets before waiting for any."""
         if not self.alive:
-            self.restart()
+            try:
+                self.restart()
+            except SubmissionError as exc:  # it loaded before: failing to load again is this episode's failure
+                raise PolicyError(f"dead: the policy process failed to start again ({_text(str(exc), 300)})") from None
         self._episode_used = 0.0
         budget = min(self.limits.reset_seconds, self.limits.episode_seconds)
         self._send("reset", info, budget, "reset" if budget == self.limits.reset_seconds else "episode")
@@ -246,15 +251,15 @@ class PolicyProcess:
         reply = self._receive(started + self.limits.load_seconds, "loading")
         if reply.get("status") != "ready":
             self._kill()
-            message = str(reply.get("message") or "")
+            message = _text(reply.get("message") or "", 400)
             if not message.startswith("policy spec"):
-                message = f"policy spec {self.spec}: loading raised {reply.get('type', 'an error')}" + (
+                message = f"policy spec {self.spec}: loading raised {_text(reply.get('type', 'an error'))}" + (
                     f": {message}" if message else "")
             if reply.get("memory") or reply.get("cause_type") == "MemoryError":
                 message += f" (memory limit {self.limits.memory_mb} MB; raise Limits.memory_mb if it needs more)"
             raise (ProtocolError if reply.get("stage") == "protocol" else SubmissionError)(message)
-        self.policy_name = str(reply.get("policy", ""))
-        self.roles = tuple(str(r) for r in reply.get("roles") or ())
+        self.policy_name = _text(reply.get("policy", ""))
+        self.roles = tuple(_text(r) for r in reply.get("roles") or ()) if isinstance(reply.get("roles"), list) else ()
         self.load_seconds = time.monotonic() - started
 
     def _send(self, op: str, payload: Any, budget: float, what: str) -> None:
@@ -293,33 +298,13 @@ class PolicyProcess:
             raise PolicyError(f"invalid_action: unreadable reply from the policy process ({exc})") from None
 
     def _checked(self, reply: dict[str, Any], op: str) -> dict[str, Any]:
-        if reply.get("stage") == "request" and reply.get("status") == "error":
-            self._kill()
-            raise self._policy_exception(reply, f"receiving the {op} request")
-        if reply.get("seq") != self._seq:
-            self._kill()
-            raise PolicyError(f"invalid_action: reply out of order (expected {self._seq}, got {reply.get('seq')!r})")
-        seconds = reply.get("seconds", 0.0) or 0.0
-        if not isinstance(seconds, int | float) or isinstance(seconds, bool):
-            self._kill()
-            raise PolicyError(f"invalid_action: unreadable reply field seconds={seconds!r}")
-        self.last_policy_seconds = float(seconds)
-        if reply.get("status") == "error":
-            raise self._policy_exception(reply, op)
-        if reply.get("status") != "ok":
-            self._kill()
-            raise PolicyError(f"invalid_action: unreadable reply status {reply.get('status')!r}")
+        try:
+            reply, self.last_policy_seconds = check_reply(reply, self._seq, op, self.limits.memory_mb)
+        except PolicyError as exc:
+            if exc.stop:
+                self._kill()
+            raise
         return reply
-
-    def _policy_exception(self, reply: dict[str, Any], op: str) -> PolicyError:
-        name, message = str(reply.get("type", "Exception")), str(reply.get("message", ""))
-        where = f" ({reply['where']})" if reply.get("where") else ""
-        details = str(reply.get("traceback", ""))
-        if reply.get("memory"):
-            self._kill()
-            return PolicyError(f"memory: {name} in {op}{where} (limit {self.limits.memory_mb} MB)", details)
-        text = f"{name}: {message}" if message else name
-        return PolicyError(f"exception: {text}{where}", details)
 
     def _death_reason(self) -> str:
         proc = self._proc
@@ -350,6 +335,45 @@ class PolicyProcess:
         self._proc = self._sock = self._finalizer = None
 
 
+def check_reply(reply: Any, seq: int, op: str, memory_mb: int) -> tuple[dict[str, Any], float]:
+    """(reply, seconds the policy spent) of an answer to request `seq` (`op`: reset, act, probe), every field
+    the evaluator reads checked by type; raises `PolicyError` (with `stop` when the process must be stopped:
+    an answer out of order or unreadable, an error receiving the request, memory exhausted)."""
+    if not isinstance(reply, dict):
+        raise PolicyError(f"invalid_action: unreadable reply from the policy process ({_shown(reply)})", stop=True)
+    if reply.get("stage") == "request" and reply.get("status") == "error":
+        raise _policy_exception(reply, f"receiving the {op} request", memory_mb, stop=True)
+    got = reply.get("seq")
+    if isinstance(got, bool) or not isinstance(got, int) or got != seq:
+        raise PolicyError(f"invalid_action: reply out of order (expected {seq}, got {_shown(got)})", stop=True)
+    seconds = reply.get("seconds", 0.0)
+    if seconds is None:
+        seconds = 0.0
+    if isinstance(seconds, bool) or not isinstance(seconds, int | float) or not 0 <= seconds < 1e9:
+        raise PolicyError(f"invalid_action: unreadable reply field seconds={_shown(seconds)}", stop=True)
+    if reply.get("status") == "error":
+        raise _policy_exception(reply, op, memory_mb)
+    if reply.get("status") != "ok":
+        raise PolicyError(f"invalid_action: unreadable reply status {_shown(reply.get('status'))}", stop=True)
+    return reply, float(seconds)
+
+
+def _policy_exception(reply: dict[str, Any], op: str, memory_mb: int, stop: bool = False) -> PolicyError:
+    """The `PolicyError` of an error reply (`policy_child._describe`), its fields read as text whatever they are."""
+    name, message = _text(reply.get("type", "Exception")), _text(reply.get("message", ""), 400)
+    where = f" ({_text(reply['where'])})" if reply.get("where") else ""
+    details = _text(reply.get("traceback", ""), 2000)
+    if reply.get("memory") is True:
+        return PolicyError(f"memory: {name} in {op}{where} (limit {memory_mb} MB)", details, stop=True)
+    text = f"{name}: {message}" if message else name
+    return PolicyError(f"exception: {text}{where}", details, stop=stop)
+
+
+def _text(value: Any, limit: int = 80) -> str:
+    text = value if isinstance(value, str) else repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def validate_actions(reply: dict[str, Any], acting: Any) -> dict[str, int]:
     """Check a policy process's `act` reply against the acting agents; return `{agent_id: int}` or raise
     `PolicyError` (`invalid_action: ...`) naming the agent, the value and the fix."""
@@ -369,7 +393,7 @@ def validate_actions(reply: dict[str, Any], acting: Any) -> dict[str, int]:
             raise PolicyError(f"invalid_action: act returned the key {_shown(key)}; keys must be agent ids "
                               f"such as {wanted[0] if wanted else 'agent_0'!r}")
         if key not in wanted:
-            raise PolicyError(f"invalid_action: action for {key!r}, which is not acting (acting: "
+            raise PolicyError(f"invalid_action: action for {_text(key)!r}, which is not acting (acting: "
                               f"{', '.join(wanted)}); return actions only for the agents in the observations")
         if isinstance(value, bool) or not isinstance(value, int):
             raise PolicyError(f"invalid_action: {key} returned {_shown(value)}; return an int in 0..3")
@@ -401,8 +425,8 @@ def validate_agent_answer(reply: dict[str, Any], agent_id: str) -> tuple[int, An
 
 def _shown(value: Any) -> str:
     if isinstance(value, dict) and "repr" in value:
-        return f"{value['repr']} ({value.get('type', '?')})"
-    return f"{value!r} ({type(value).__name__})"
+        return f"{_text(value['repr'])} ({_text(value.get('type', '?'))})"
+    return f"{_text(value)} ({type(value).__name__})"
 
 
 def _stdout_target() -> int | None:

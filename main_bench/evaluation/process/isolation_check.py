@@ -160,17 +160,17 @@ class Trap:
 
     def verdict(self, reply: dict[str, Any] | None, root: Path | None) -> IsolationVerdict:
         """Judge the probe's reply (None: the probe could not run) and the bait's inotify events."""
-        escapes = list(reply.get("succeeded", [])) if reply else []
+        reply, escapes = _probe_fields(reply)
         name = f".main-bench-escape-{self.token}"
         for folder in (root, self.secret.parent):
             if folder is not None and (folder / name).exists():
                 (folder / name).unlink()
                 escapes.append(f"wrote into {folder}")
         if reply:
-            nets = [n for n in reply.get("interfaces", []) if n != "lo"]
+            nets = [n for n in reply["interfaces"] if n != "lo"]
             if nets:
                 escapes.append(f"saw the network interfaces {', '.join(nets)}")
-            env = reply.get("environment") or {}
+            env = reply["environment"]
             inherited = sorted(k for k, v in env.items() if os.environ.get(k) == v and k not in SANDBOX_ENV
                                and k not in ("PWD", "LC_CTYPE") and not k.endswith("_THREADS"))
             if inherited:
@@ -201,3 +201,23 @@ class Trap:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _probe_fields(reply: Any) -> tuple[dict[str, Any] | None, list[str]]:
+    """(the probe's reply with `interfaces` and `environment` as lists and dicts of text, its `succeeded`
+    escapes as text): it comes from the policy's process, so a field of another type is itself a failure."""
+    if not reply:
+        return None, []
+    if not isinstance(reply, dict):
+        return None, [f"sent an unreadable probe reply ({type(reply).__name__})"]
+    escapes: list[str] = []
+    fields: dict[str, Any] = {}
+    for name, kind, empty in (("succeeded", list, []), ("interfaces", list, []), ("environment", dict, {})):
+        value = reply.get(name, empty)
+        if not isinstance(value, kind):
+            escapes.append(f"sent an unreadable probe reply ({name} is {type(value).__name__})")
+            value = empty
+        fields[name] = ({str(k): str(v) for k, v in value.items()} if isinstance(value, dict)
+                        else [str(v) for v in value])
+    return fields, [*fields["succeeded"], *escapes]
+

@@ -36,16 +36,18 @@ from typing import Any
 
 from ...errors import InputError
 
-#: The whole environment of a sandboxed policy process (thread variables are added by `PolicyProcess`).
+PACKAGE_DIR = Path(__file__).resolve().parents[2]
+#: The whole environment of a sandboxed policy process (thread variables are added by `PolicyProcess`); the
+#: toolkit is importable from where this evaluator imported it (an installed copy or a source checkout).
 SANDBOX_ENV: dict[str, str] = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp",
-                               "LANG": "C.UTF-8", "PYTHONDONTWRITEBYTECODE": "1", "PYTHONNOUSERSITE": "1"}
+                               "LANG": "C.UTF-8", "PYTHONDONTWRITEBYTECODE": "1", "PYTHONNOUSERSITE": "1",
+                               "PYTHONPATH": str(PACKAGE_DIR.parent)}
 SYSTEM_DIRS: tuple[str, ...] = ("/usr", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32", "/etc")
 #: Device nodes a GPU policy needs, shown when they exist.
 GPU_DEVICES: tuple[str, ...] = ("/dev/nvidiactl", "/dev/nvidia-uvm", "/dev/nvidia-uvm-tools", "/dev/nvidia0",
                                 "/dev/dri")
 NO_SANDBOX_HINT = ("install bubblewrap (Debian/Ubuntu: apt-get install bubblewrap) and allow user namespaces, or "
                    "pass --no-sandbox to run the policy unsandboxed (recorded in the results)")
-PACKAGE_DIR = Path(__file__).resolve().parents[2]
 #: bubblewrap version that limits a tmpfs's size (`--size`); older ones get an unlimited /tmp.
 SIZE_OPTION_SINCE = (0, 8, 0)
 

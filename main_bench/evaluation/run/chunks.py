@@ -26,6 +26,9 @@ class Chunk:
     agents: int
     part: int
     episode_ids: tuple[str, ...]
+    #: SHA-256 of the run's seal (`ledger.seal_document`: its identity and every chunk), written into this
+    #: chunk's ledger entry; "" outside a run.
+    seal: str = ""
 
     @property
     def weight(self) -> int:

@@ -1,7 +1,8 @@
 """A hostile submission that misbehaves differently per episode, read from `modes.json` next to it.
 
-`modes.json` maps episode ids to one of: ok, raise, hang, garbage, nan, exit, memory. Episodes it does not
-list are played `ok` (a few random moves, then `found`). The tests copy this file into a temporary folder.
+`modes.json` maps an episode's fingerprint (`fingerprint`: agent_0's first `target` observation, which no
+episode id is needed to see) to one of: ok, raise, hang, garbage, nan, exit, memory. Episodes it does not list
+are played `ok` (a few random moves, then `found`). The tests copy this file into a temporary folder.
 """
 
 from __future__ import annotations
@@ -14,6 +15,11 @@ from pathlib import Path
 import numpy as np
 
 
+def fingerprint(target) -> str:
+    """The key of an episode in `modes.json`: agent_0's target observation, rounded to millimetres."""
+    return ",".join(f"{float(v):.3f}" for v in np.atleast_1d(np.asarray(target)))
+
+
 class Policy:
     def __init__(self, root: Path, seed: int = 0) -> None:
         self.modes = json.loads((Path(root) / "modes.json").read_text())
@@ -22,11 +28,13 @@ class Policy:
         self.hoard: list = []
 
     def reset(self, info) -> None:
-        self.mode = self.modes.get(info.extra["episode_id"], "ok")
+        self.mode = "ok"
         self.t = 0
 
     def act(self, observations: dict) -> dict:
         self.t += 1
+        if self.t == 1:
+            self.mode = self.modes.get(fingerprint(observations["agent_0"]["target"]), "ok")
         if self.t < 2:
             return {a: 2 for a in observations}
         mode = self.mode

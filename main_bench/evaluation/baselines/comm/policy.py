@@ -121,7 +121,7 @@ class CommAgent:
         self._floats = HIDDEN
 
     def reset(self, info: Any) -> None:
-        """New episode: clear the memory, seed the sampler from this agent's episode seed."""
+        """New episode: clear the memory, seed the sampler from this agent's seed (per run and agent)."""
         self._gen = torch.Generator().manual_seed((self.seed * 1_000_003 + int(info.seed)) % (2**63))
         self._hidden = torch.zeros(1, HIDDEN)
         self._prev = NUM_ACTIONS
