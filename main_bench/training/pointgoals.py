@@ -35,7 +35,7 @@ def point_goal_dataset(src: str | Path, out: str | Path, *, overwrite: bool = Fa
     """Write the point-goal copy of data set `src` to `out` (see the module docstring); returns `out`."""
     from ..episodes.manifest import read_manifest
     from ..evaluation.run.resources import EpisodeResources
-    from ..evaluation.scoring.task_rules import sim_settings_from_manifest
+    from ..sim.from_manifest import sim_settings_from_manifest
 
     manifest = read_manifest(src)
     resources = EpisodeResources(manifest, sim_settings_from_manifest(manifest, "auto"),

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from main_bench.errors import InputError
-from main_bench.vector.layout import EPISODE_STATS, VecSpec, layout
-from main_bench.vector.sampler import ProcessSampler, make_sampler, split_rows
+from main_bench.vector.layout import EPISODE_STATS, VecSpec, layout, split_rows
+from main_bench.vector.sampler import ProcessSampler, make_sampler
 
 SMALL = 16
 
