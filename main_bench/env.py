@@ -92,7 +92,8 @@ class MainParallelEnv(ParallelEnv):
 
         from .episodes.dataset import load_episodes, read_manifest
         from .evaluation.run.resources import EpisodeResources
-        from .evaluation.scoring.task_rules import max_steps_of, sim_settings_from_manifest
+        from .sim.from_manifest import sim_settings_from_manifest
+        from .task_rules import max_steps_of
 
         if track not in TRACKS:
             raise InputError(f"track must be one of {', '.join(TRACKS)}, got {track!r}")
@@ -134,7 +135,7 @@ class MainParallelEnv(ParallelEnv):
         self.sim_settings = sim_settings
         self.max_steps = int(max_steps or max_steps_of(self.manifest))
         #: Radius of the data set's success regions (m); a `found` call is correct within one navmesh cell of
-        #: the region (`evaluation.task_rules.found_tolerance`).
+        #: the region (`task_rules.found_tolerance`).
         self.success_distance = float(self.manifest.success_distance)
         self.possible_agents = list(agent_ids(n))
         self.agents: list[str] = []
@@ -170,7 +171,7 @@ class MainParallelEnv(ParallelEnv):
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
         """Start an episode: `options["episode_id"]`, else one drawn from the generator (reseeded by `seed`)."""
         from .evaluation.episode_loop import LoopSettings
-        from .evaluation.scoring.task_rules import rules_from_manifest
+        from .sim.from_manifest import rules_from_manifest
         from .sim.task import EpisodeJudge, TaskRules
 
         if seed is not None:

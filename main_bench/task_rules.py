@@ -1,19 +1,27 @@
-"""The task rules and the simulator settings of a data set, read from its manifest.
+"""The task rules of a data set, read from its manifest: the one description that validation, evaluation, the
+environment and the leaderboard share.
 
 Every submission is scored with the data set's own values: agent radius, height and max climb (its navmesh
-settings), success regions (stored with the episodes; a `found` call is correct within one navmesh cell of
-the region), max steps per agent, the actions' step and turn, and the camera (its generation
+settings), success regions (stored with the episodes; a `found` call is correct within `SUCCESS_TOLERANCE_CELLS`
+navmesh cells of the region), max steps per agent, the actions' step and turn, and the camera (its generation
 settings; reading a manifest written before these were recorded fills in `GenerationSettings`' defaults,
-DESIGN.md's: 500 steps, 0.25 m, 30 deg, 128 x 128, hfov 90 deg at 1.25 m, depth to 10 m).
+DESIGN.md's: 500 steps, 0.25 m, 30 deg, 128 x 128, hfov 90 deg at 1.25 m, depth to 10 m). `rules_json` is that
+description as `summary.json` and `validate --json` record it; the simulator's settings and `TaskRules` are
+made from it (`sim.from_manifest`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:  # the simulator's modules are heavy; `describe_rules` is imported by the leaderboard
-    from ...sim.task import TaskRules
+#: A `found` call is correct within this many navmesh cells (geodesic) of the success region.
+SUCCESS_TOLERANCE_CELLS = 1.0
+
+
+def success_tolerance(cell_size: float) -> float:
+    """Geodesic distance (m) to the success region within which a `found` call is correct: one cell."""
+    return float(SUCCESS_TOLERANCE_CELLS * cell_size)
 
 
 def max_steps_of(manifest: Any) -> int:
@@ -23,44 +31,22 @@ def max_steps_of(manifest: Any) -> int:
 
 def found_tolerance(manifest: Any) -> float:
     """Geodesic distance (m) to a target's stored success region within which a `found` call is correct: one
-    cell of the data set's navmesh (`episodes.goals.success_tolerance`)."""
-    from ...episodes.goals import success_tolerance
-
+    cell of the data set's navmesh (`success_tolerance`)."""
     return success_tolerance(float(manifest.navmesh().cell_size))
 
 
-def rules_from_manifest(manifest: Any, task: str) -> TaskRules:
-    """`TaskRules` for `task`: distances are to the success regions the data set stores (the success distance is
-    in the regions), so a call is correct within `found_tolerance`; the data set's max steps."""
-    from ...sim.task import TaskRules
-
-    return TaskRules(task=task, success_distance=found_tolerance(manifest), max_steps=max_steps_of(manifest))
-
-
-def sim_settings_from_manifest(manifest: Any, renderer: str, gpu: int | None = None) -> Any:
-    """`SimSettings` with the data set's agent body (radius, height, max climb), actions and camera, and the
-    chosen renderer (on EGL device `gpu`, None: the default display)."""
-    from ...sim.settings import CameraSettings, SimSettings
-
-    gen = manifest.settings
-    camera = CameraSettings(width=int(gen.camera_width), height=int(gen.camera_height),
-                            hfov_deg=float(gen.camera_hfov_deg), height_m=float(gen.camera_height_m),
-                            max_depth=float(gen.max_depth))
-    return SimSettings.for_agent_body(manifest.navmesh(), renderer=renderer, gpu=gpu, camera=camera,
-                                      forward_step=float(gen.forward_step),
-                                      turn_angle_deg=float(gen.turn_angle_deg))
-
-
 def rules_json(manifest: Any) -> dict[str, Any]:
-    """The rules as recorded in summary.json (`task_rules`)."""
-    sim = sim_settings_from_manifest(manifest, "auto")
+    """The rules of `manifest`'s data set, as recorded in summary.json (`task_rules`)."""
+    gen, body = manifest.settings, manifest.navmesh()
     return {"success_distance": float(manifest.success_distance), "found_tolerance": found_tolerance(manifest),
             "success_region": "navigable cells within success_distance of the object's footprint that see it "
                               "(point goal: geodesic); l_i and d_i are measured to the region",
-            "max_steps": max_steps_of(manifest), "agent_radius": sim.agent_radius,
-            "agent_height": sim.agent_height, "max_climb": sim.max_climb, "forward_step": sim.forward_step,
-            "turn_angle_deg": sim.turn_angle_deg, "camera": {"width": sim.camera.width, "height": sim.camera.height,
-            "hfov_deg": sim.camera.hfov_deg, "height_m": sim.camera.height_m, "max_depth": sim.camera.max_depth}}
+            "max_steps": max_steps_of(manifest), "agent_radius": float(body.agent_radius),
+            "agent_height": float(body.agent_height), "max_climb": float(body.max_climb),
+            "forward_step": float(gen.forward_step), "turn_angle_deg": float(gen.turn_angle_deg),
+            "camera": {"width": int(gen.camera_width), "height": int(gen.camera_height),
+                       "hfov_deg": float(gen.camera_hfov_deg), "height_m": float(gen.camera_height_m),
+                       "max_depth": float(gen.max_depth)}}
 
 
 def describe_rules(rules: Mapping[str, Any]) -> str:

@@ -17,10 +17,10 @@ from typing import Any, Protocol
 from .. import __version__
 from ..errors import DatasetError, ResultsError, SubmissionError
 from ..io import atomic_write_json, folder_lock, read_json
+from ..task_rules import rules_json
 from .baselines import privileged_baseline
 from .ledger import remove_unfinished_writes, verified_files
 from .run.chunks import Chunk, make_chunks
-from .scoring.task_rules import rules_json
 from .settings import EvalSettings, SubmissionMeta
 
 RUN_FILE = "run.json"

@@ -10,7 +10,7 @@ import base64
 from html import escape
 
 from .. import __version__
-from ..evaluation.scoring.task_rules import describe_rules
+from ..task_rules import describe_rules
 from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
 from .report import Section
 from .submissions import Submission

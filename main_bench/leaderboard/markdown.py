@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..evaluation.scoring.task_rules import describe_rules
+from ..task_rules import describe_rules
 from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, metric_title, track_title
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable
 

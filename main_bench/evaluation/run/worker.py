@@ -19,12 +19,12 @@ import pyarrow as pa
 
 from ...episodes.schema import Episode
 from ...errors import DatasetError, PolicyFailure
+from ...sim.from_manifest import rules_from_manifest, sim_settings_from_manifest
 from .. import ledger
 from ..baselines import privileged_baseline
 from ..episode_loop import EpisodeFailure, LoopSettings, run_episode
 from ..records import RECORD_SCHEMA, TRAJECTORY_SCHEMA, write_part
 from ..scoring.metrics import EpisodeTrace, episode_metrics
-from ..scoring.task_rules import rules_from_manifest, sim_settings_from_manifest
 from ..settings import EvalSettings
 from .chunks import Chunk
 from .resources import EpisodeResources
