@@ -39,10 +39,10 @@ def check_agent(
     """Check that a submission loads, follows the team policy protocol (or, with --mode silent/comm, the agent
     policy protocol), answers with valid actions (and messages) for exactly the acting agents, is deterministic
     for a seed and stays within the time limit, in its own process (one per agent for agent policies)."""
-    from ..evaluation.check import CheckSettings, check_policy
+    from ..evaluation.policy.check import CheckSettings, check_policy
+    from ..evaluation.policy.submission import parse_spec
     from ..evaluation.process.isolation import Limits
     from ..evaluation.process.sandbox import SandboxSettings, require_sandbox
-    from ..evaluation.submission import parse_spec
 
     policy_spec = parse_spec(spec)
     if not no_sandbox:

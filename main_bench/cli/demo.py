@@ -52,8 +52,8 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
     from ..episodes.settings import GenerationSettings
     from ..episodes.sources import resolve_sources
     from ..episodes.validate import validate_dataset
-    from ..evaluation.runner import evaluate
-    from ..evaluation.settings import EvalSettings, SubmissionMeta
+    from ..evaluation.run.runner import evaluate
+    from ..evaluation.run.settings import EvalSettings, SubmissionMeta
     from ..leaderboard.build import build_leaderboard
     from ..navmesh import NavMeshSettings
     from ..stats.report import StatsSettings, compute_stats

@@ -29,9 +29,12 @@ def warm_up() -> None:
     import pandas  # noqa: F401
     import pyarrow.parquet  # noqa: F401
 
-    from ..evaluation import runner  # noqa: F401
     from ..evaluation.baselines import oracle  # noqa: F401
-    from ..evaluation.run import executors, worker  # noqa: F401
+    from ..evaluation.run import (  # noqa: F401
+        executors,
+        runner,  # noqa: F401
+        worker,
+    )
     from ..navmesh import NavMesh
     from ..scenes.loader import Scene
     from ..scenes.procedural.box_mesh import boxes_to_arrays

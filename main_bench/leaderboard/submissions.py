@@ -14,8 +14,8 @@ from typing import Any
 import pandas as pd
 
 from ..errors import ResultsError
-from ..evaluation.records import TEAM
-from ..evaluation.results import Results, load_results
+from ..evaluation.output.records import TEAM
+from ..evaluation.output.results import Results, load_results
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,8 @@ import pytest
 from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
-from main_bench.evaluation.ledger import file_hashes
-from main_bench.evaluation.records import (
+from main_bench.evaluation.output.ledger import file_hashes
+from main_bench.evaluation.output.records import (
     RECORD_SCHEMA,
     RESULTS_SCHEMA_VERSION,
     TEAM,

@@ -10,7 +10,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from lb_fixtures import make_results
 
-from main_bench.evaluation.ledger import file_hashes
+from main_bench.evaluation.output.ledger import file_hashes
 from main_bench.leaderboard.episode_view import load_episode_view
 from main_bench.leaderboard.talk import has_messages
 from main_bench.leaderboard.visualize import episode_figure, episode_png

@@ -22,7 +22,7 @@ def read_targets(episode_seed_value: int) -> tuple[str, list] | None:
     """(shard file, target_positions) of the episode whose seed is `episode_seed_value`, or None."""
     import pyarrow.parquet as pq
 
-    from main_bench.evaluation.episode_loop import episode_seed
+    from main_bench.evaluation.play.episode_loop import episode_seed
 
     seeds = [int(s.rsplit("/", 1)[-1]) for s in evaluator_option("--seed") if s.rsplit("/", 1)[-1].isdigit()]
     seeds = seeds or [0]

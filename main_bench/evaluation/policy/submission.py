@@ -29,7 +29,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import SubmissionError
+from ...errors import SubmissionError
 
 #: Attribute names tried, in order, when a spec names none.
 DEFAULT_ATTRS: tuple[str, ...] = ("make_policy", "Policy")

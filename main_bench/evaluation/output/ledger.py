@@ -17,11 +17,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import ResultsError
-from ..io import atomic_write_json, check_schema_version, read_json, sha256_file
+from ...errors import ResultsError
+from ...io import atomic_write_json, check_schema_version, read_json, sha256_file
 
 if TYPE_CHECKING:
-    from .run.chunks import Chunk
+    from ..run.chunks import Chunk
 
 LEDGER_SCHEMA_VERSION = 1
 PART_KINDS: tuple[str, ...] = ("records", "trajectories")
