@@ -190,3 +190,10 @@ def test_the_checks_fail_on_a_synthetic_package(tmp_path: Path) -> None:
     assert cycles(graph) == []
     with pytest.raises(AssertionError, match="belongs to no stage"):
         stage_of("other.module", stages)
+
+
+def test_the_architecture_page_names_every_module() -> None:
+    page = (ROOT.parent / "docs" / "architecture.md").read_text()
+    missing = [str(path.relative_to(ROOT)) for path in sorted(ROOT.rglob("*.py"))
+               if path.name != "__init__.py" and path.name not in page]
+    assert not missing, "docs/architecture.md does not name: " + ", ".join(missing)
