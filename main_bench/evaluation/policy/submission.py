@@ -35,7 +35,7 @@ from ...errors import SubmissionError
 DEFAULT_ATTRS: tuple[str, ...] = ("make_policy", "Policy")
 POLICY_FILE = "policy.py"
 BASELINE_PREFIX = "baseline:"
-BASELINES_DIR = Path(__file__).resolve().parent / "baselines"
+BASELINES_DIR = Path(__file__).resolve().parents[1] / "baselines"
 
 SpecKind = Literal["module", "file", "directory"]
 
