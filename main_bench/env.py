@@ -8,7 +8,7 @@
         observations, rewards, terminations, truncations, infos = env.step(actions)
 
 Agents are `agent_0` ... `agent_{N-1}` for one team size N; observations follow
-`main_bench.evaluation.protocol.observation_space` (rgb, depth in metres, target, contact, gps_compass on the gps
+`main_bench.evaluation.policy.protocol.observation_space` (rgb, depth in metres, target, contact, gps_compass on the gps
 track), actions `Discrete(4)` (0 found, 1 move_forward, 2 turn_left, 3 turn_right). An episode is played with
 exactly the evaluator's rules (`sim.task.EpisodeJudge`) and the data set's own task rules and agent body; the
 camera can be made smaller for training (`image_size`).
@@ -33,7 +33,7 @@ Messages (the `comm` mode's channel, `message_floats=F` > 0): every observation 
 (`protocol.inbox_space`: row j is what agent j sent this agent on the previous step, `lengths[j]` values of
 it), and an action may carry a message: `{"action": a, "message": (F,) float32, "to": -1 or j}`
 (`protocol.message_action_space`), or `(action, message)` exactly as an `AgentPolicy` returns it, or a bare
-action (no message). The channel's rules are the evaluator's (`evaluation.channel`), so an agent policy
+action (no message). The channel's rules are the evaluator's (`evaluation.play.channel`), so an agent policy
 trained here runs unchanged under `main-bench evaluate --mode comm`:
 
     action, message = policy.act(observation, observation["inbox"])
@@ -50,8 +50,8 @@ import numpy as np
 from pettingzoo import ParallelEnv
 
 from .errors import DatasetError, InputError
-from .evaluation.episode_loop import build_observations, measure_distances, target_observations
-from .evaluation.protocol import (
+from .evaluation.play.episode_loop import build_observations, measure_distances, target_observations
+from .evaluation.policy.protocol import (
     FOUND,
     TRACKS,
     action_space,
@@ -94,7 +94,8 @@ class MainParallelEnv(ParallelEnv):
 
         from .episodes.dataset import load_episodes, read_manifest
         from .evaluation.run.resources import EpisodeResources
-        from .evaluation.scoring.task_rules import max_steps_of, sim_settings_from_manifest
+        from .sim.from_manifest import sim_settings_from_manifest
+        from .task_rules import max_steps_of
 
         if track not in TRACKS:
             raise InputError(f"track must be one of {', '.join(TRACKS)}, got {track!r}")
@@ -136,7 +137,7 @@ class MainParallelEnv(ParallelEnv):
         self.sim_settings = sim_settings
         self.max_steps = int(max_steps or max_steps_of(self.manifest))
         #: Radius of the data set's success regions (m); a `found` call is correct within one navmesh cell of
-        #: the region (`evaluation.task_rules.found_tolerance`).
+        #: the region (`task_rules.found_tolerance`).
         self.success_distance = float(self.manifest.success_distance)
         self.possible_agents = list(agent_ids(n))
         self.agents: list[str] = []
@@ -171,8 +172,8 @@ class MainParallelEnv(ParallelEnv):
 
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
         """Start an episode: `options["episode_id"]`, else one drawn from the generator (reseeded by `seed`)."""
-        from .evaluation.episode_loop import LoopSettings
-        from .evaluation.scoring.task_rules import rules_from_manifest
+        from .evaluation.play.episode_loop import LoopSettings
+        from .sim.from_manifest import rules_from_manifest
         from .sim.task import EpisodeJudge, TaskRules
 
         if seed is not None:
@@ -248,7 +249,7 @@ class MainParallelEnv(ParallelEnv):
     def _new_channel(self) -> Any:
         if not self.message_floats:
             return None
-        from .evaluation.channel import Channel
+        from .evaluation.play.channel import Channel
 
         return Channel(tuple(self.possible_agents), self.message_floats)
 
@@ -256,7 +257,7 @@ class MainParallelEnv(ParallelEnv):
         """(action, checked message or None) of one agent's entry in `step`'s actions."""
         if not self.message_floats:
             return given, None
-        from .evaluation.channel import MessageError, check_message, describe_message
+        from .evaluation.play.channel import MessageError, check_message, describe_message
 
         if isinstance(given, dict) and "action" in given:
             to = int(np.asarray(given.get("to", -1)).item())

@@ -51,7 +51,7 @@ def read_values(files: Sequence[Path], columns: list[str], *, error: type[InputE
 
     Unlike `read_parquet`, this imports neither `pyarrow.dataset` nor pandas (pyarrow imports pandas, when
     installed, with its datasets module and on its first conversion to NumPy or from Python objects), so an
-    evaluation plans its work without them while its forked workers wait for it (`evaluation.runner.plan`).
+    evaluation plans its work without them while its forked workers wait for it (`evaluation.run.runner.plan`).
     """
     values: dict[str, list] = {c: [] for c in columns}
     for f in files:

@@ -177,7 +177,7 @@ def test_a_stale_socket_is_replaced_and_an_idle_server_exits(tmp_path):
     stale.close()  # the file stays, nobody listens
     log = tmp_path / "server.log"
     with open(log, "wb") as out:
-        server = subprocess.Popen([sys.executable, "-m", "main_bench.cli.warm", str(path), json.dumps(sys.path), "2"],
+        server = subprocess.Popen([sys.executable, "-m", "main_bench.cli.warm_server", str(path), json.dumps(sys.path), "2"],
                                   stdout=out, stderr=out, cwd=ROOT)
     try:
         _wait_for(lambda: "listening on" in log.read_text(), 120, "the server to listen")

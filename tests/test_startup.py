@@ -40,7 +40,7 @@ def test_the_command_line_forks_its_evaluation_workers_light():
     navmesh kernels loaded on a navmesh made in memory): no scene library, no k-d trees, no plotting, no
     pandas or pyarrow's dataset reader (which brings pandas: the worker runs without it, the command loads it
     once the worker has work), and nothing that makes forking unsafe (`fork_is_safe`)."""
-    code = ("import json, sys, main_bench.cli.app, main_bench.cli.evaluate, main_bench.evaluation.runner; "
+    code = ("import json, sys, main_bench.cli.app, main_bench.cli.evaluate, main_bench.evaluation.run.runner; "
             "from main_bench.evaluation.run.worker import load_kernels; "
             "from main_bench.worker_threads import fork_is_safe; "
             "load_kernels(); "

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..evaluation.episode_loop import episode_seed
+from ..evaluation.play.episode_loop import episode_seed
 
 
 def _rows(observation: dict[str, Any]) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Coordination modes' evaluation speed: agent-steps per second of `central`, `silent` and `comm` runs of the
 same 3-agent episodes, and the decentralized modes' share of the central rate (goal: at least 70%).
 
-What is timed: `evaluation.runner.evaluate` on the committed sample data set (val, both tasks, teams of 3,
+What is timed: `evaluation.run.runner.evaluate` on the committed sample data set (val, both tasks, teams of 3,
 `episodes` per task), one worker, from start to summary (processes started, episodes rendered and played,
 results written). The policies (`mode_policies`) do the same per-agent work in every mode and play the same
 trajectories, so the rates differ only by how the team is driven: one policy process for the whole team
@@ -35,8 +35,8 @@ def sample_dataset() -> Path:
 
 def time_mode(mode: str, episodes: int, workdir: Path, cache: Path, repeat: int) -> dict[str, Any]:
     """One evaluation in `mode`: agent-steps, seconds and agent-steps per second (wall clock)."""
-    from ..evaluation.runner import evaluate
-    from ..evaluation.settings import EvalSettings
+    from ..evaluation.run.runner import evaluate
+    from ..evaluation.run.settings import EvalSettings
 
     settings = EvalSettings(episodes=sample_dataset(), split="val", agent=POLICIES[mode],
                             out=workdir / f"{mode}-{repeat}", agents=(AGENTS,), limit=episodes, cache_dir=cache,

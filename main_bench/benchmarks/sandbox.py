@@ -36,7 +36,7 @@ class Policy:
 
 
 def _one(spec: Any, sandboxed: bool, steps: int) -> dict[str, Any]:
-    from ..evaluation.check import CheckSettings, synthetic_episode_info, synthetic_observations
+    from ..evaluation.policy.check import CheckSettings, synthetic_episode_info, synthetic_observations
     from ..evaluation.process.isolation import Limits, PolicyProcess
     from ..evaluation.process.sandbox import SandboxSettings
 
@@ -58,7 +58,7 @@ def _one(spec: Any, sandboxed: bool, steps: int) -> dict[str, Any]:
 def run(quick: bool = False) -> dict[str, Any]:
     """Medians of policy start (s) and step round trip (ms), sandboxed and bare, and their ratios."""
     from ..evaluation import sandbox
-    from ..evaluation.submission import parse_spec
+    from ..evaluation.policy.submission import parse_spec
 
     machine = machine_info()
     t = time.perf_counter()

@@ -13,6 +13,7 @@ import sys
 import typer
 
 from ..errors import MainBenchError
+from .warm import run_warm
 
 app = typer.Typer(
     name="main-bench",
@@ -161,8 +162,6 @@ def run() -> None:
 
     With `MAIN_BENCH_WARM=1` the command runs in a warm server's forked process when one answers
     (`cli.warm`), and this process only passes on its streams and exit code."""
-    from .warm import run_warm
-
     code = run_warm(sys.argv[1:])
     if code is None:
         code = main()

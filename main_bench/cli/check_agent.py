@@ -41,10 +41,10 @@ def check_agent(
     """Check that a submission loads, follows the protocol of its kind (a team policy: central mode; an agent
     policy: silent or comm mode, one process per agent), answers with valid actions (and messages) for exactly
     the acting agents, is deterministic for a seed and stays within the time limit, in its own process."""
-    from ..evaluation.check import CheckSettings, check_policy, mode_for, policy_kind
+    from ..evaluation.policy.check import CheckSettings, check_policy, mode_for, policy_kind
+    from ..evaluation.policy.submission import parse_spec
     from ..evaluation.process.isolation import Limits
     from ..evaluation.process.sandbox import SandboxSettings, require_sandbox
-    from ..evaluation.submission import parse_spec
 
     policy_spec = parse_spec(spec)
     if not no_sandbox:

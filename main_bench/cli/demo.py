@@ -43,8 +43,8 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
     Returns the output paths and the seconds each stage took. Re-running reuses what is already there
     (built houses, cached navmeshes, finished shards and result chunks).
     """
-    from ..evaluation.runner import evaluate
-    from ..evaluation.settings import EvalSettings, SubmissionMeta
+    from ..evaluation.run.runner import evaluate
+    from ..evaluation.run.settings import EvalSettings, SubmissionMeta
     from ..leaderboard.build import build_leaderboard
     from ..stats.report import StatsSettings, compute_stats
 
@@ -84,7 +84,7 @@ def run_demo(settings: DemoSettings, log: Callable[[str], None] = lambda _m: Non
     log("[6/6] leaderboard")
     board = build_leaderboard(list(results.values()), out / "leaderboard")
     lap("leaderboard")
-    from ..evaluation.results import load_results
+    from ..evaluation.output.results import load_results
 
     picture = str(sorted(load_results(results["oracle"]).teams["episode_id"].astype(str))[0])
     return {

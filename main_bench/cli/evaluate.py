@@ -115,8 +115,8 @@ def evaluate(
     trajectories and summary.json with 95% CIs."""
     if ctx.invoked_subcommand is not None:
         return
-    from ..evaluation.runner import evaluate as run_evaluation
-    from ..evaluation.settings import EvalSettings, PolicyLimits, SubmissionMeta
+    from ..evaluation.run.runner import evaluate as run_evaluation
+    from ..evaluation.run.settings import EvalSettings, PolicyLimits, SubmissionMeta
 
     missing = [flag for flag, v in (("--episodes", episodes), ("--agent", agent), ("--out", out)) if v is None]
     if missing:

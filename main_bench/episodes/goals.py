@@ -12,7 +12,7 @@ A target's *success region* is a set of navigable cells of the data set's navmes
 
 `l_i` is the geodesic distance from agent i's start to the nearest cell of its region, `d_i` the distance to
 the region at the end, and a `found` call is correct when the agent's distance to its region is at most
-`SUCCESS_TOLERANCE_CELLS` navmesh cells (inside a cell is up to half a diagonal from its centre). So an
+`task_rules.SUCCESS_TOLERANCE_CELLS` navmesh cells (inside a cell is up to half a diagonal from its centre). So an
 agent that walks the shortest path walks `l_i` and every metre of detour costs SPL. An object whose region is
 empty is not a target.
 
@@ -32,15 +32,6 @@ from .visibility import sees_box
 if TYPE_CHECKING:
     from ..navmesh import DistanceField, NavMesh
     from ..scenes import Scene, SemanticObject
-
-#: A `found` call is correct within this many navmesh cells (geodesic) of the success region.
-SUCCESS_TOLERANCE_CELLS = 1.0
-
-
-def success_tolerance(cell_size: float) -> float:
-    """Geodesic distance (m) to the success region within which a `found` call is correct: one cell."""
-    return float(SUCCESS_TOLERANCE_CELLS * cell_size)
-
 
 def _setting(settings: Any, name: str) -> float:
     """`name` from generation settings or a manifest (its `settings`)."""

@@ -21,7 +21,7 @@ from .plan import stable_id
 
 if TYPE_CHECKING:
     from .manifest import Manifest, ShardEntry
-    from .validate import ValidationReport
+    from .validation_report import ValidationReport
 
 #: Largest |recomputed - stored| l_i accepted (metres).
 RECHECK_TOLERANCE = 1e-4

@@ -35,7 +35,7 @@ class LeaderboardSettings:
 def build_sections(subs: list[LoadedSubmission], settings: LeaderboardSettings) -> list[Section]:
     """Group submissions by data set, sensor track and coordination mode and compute each group's tables and
     plots."""
-    from ..evaluation.protocol import MODES
+    from ..evaluation.policy.protocol import MODES
 
     sections: list[Section] = []
     for group in group_by_dataset(subs, settings.allow_mixed):

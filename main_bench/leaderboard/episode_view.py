@@ -14,8 +14,8 @@ import pandas as pd
 
 from ..episodes.schema import Episode
 from ..errors import DatasetError, MainBenchError, ResultsError
-from ..evaluation.records import TEAM
-from ..evaluation.results import Results, load_results
+from ..evaluation.output.records import TEAM
+from ..evaluation.output.results import Results, load_results
 from ..suggest import did_you_mean
 
 

@@ -11,8 +11,8 @@ from collections.abc import Mapping
 from html import escape as _escape
 
 from .. import __version__
-from ..evaluation.scoring.task_rules import describe_rules
 from ..portable import portable_path, project_root
+from ..task_rules import describe_rules
 from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, link_target, shown_text, track_title
 from .provenance import BuildInfo
 from .report import Section

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from ..evaluation.scoring.task_rules import describe_rules
+from ..task_rules import describe_rules
 from .format import VERSUS, fmt_bytes, fmt_estimate, intervals_note, link_target, shown_text, track_title
 from .provenance import BuildInfo
 from .tables import TABLE2_METRICS, TRACK_METRICS, Table2, TrackTable

@@ -12,7 +12,7 @@ import pandas as pd
 from .submissions import Submission
 from .tables import Table2, TrackTable
 
-#: Section headings of the coordination modes (`evaluation.protocol.MODES`).
+#: Section headings of the coordination modes (`evaluation.policy.protocol.MODES`).
 MODE_TITLES = {
     "central": "central mode (one team policy sees every agent: an upper reference)",
     "silent": "silent mode (one policy per agent, no messages)",

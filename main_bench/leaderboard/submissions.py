@@ -14,9 +14,9 @@ from typing import Any
 import pandas as pd
 
 from ..errors import ResultsError
-from ..evaluation.records import TEAM
-from ..evaluation.results import Results, load_results
-from ..evaluation.settings import SubmissionMeta
+from ..evaluation.output.records import TEAM
+from ..evaluation.output.results import Results, load_results
+from ..evaluation.run.settings import SubmissionMeta
 from .provenance import reproduce_command
 
 

@@ -148,7 +148,7 @@ def _metrics_of(team: pd.DataFrame, columns: tuple[tuple[str, str], ...], settin
 def track_table(subs: list[LoadedSubmission], split: str, task: str, agents: int,
                 settings: TableSettings) -> TrackTable:
     """Rank the submissions scored on one track by team SPL (then success, then name); ties share a rank."""
-    from ..evaluation.channel import communication_stats
+    from ..evaluation.play.channel import communication_stats
 
     key = f"{split}/{task}/{agents}"
     rows = []

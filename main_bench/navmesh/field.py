@@ -8,14 +8,11 @@ answer does not depend on how far the field had run before it (nodes settle in t
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import _field
-
-if TYPE_CHECKING:
-    from .navmesh import NavMesh
+from .cells import NavCells
 
 #: Height tolerance (m) for straight lines of sight over smoothed heights (see `_field`).
 LINE_Z_TOLERANCE = 0.01
@@ -58,14 +55,14 @@ class FieldSpace:
     offsets: np.ndarray
 
     @classmethod
-    def of(cls, navmesh: NavMesh) -> FieldSpace:
+    def of(cls, navmesh: NavCells) -> FieldSpace:
         """The field space of `navmesh` (use `NavMesh._field_space()`, which keeps it)."""
         g = navmesh._grid
         tiles = (g.iy.astype(np.int64) // FIELD_TILE) * (g.nx // FIELD_TILE + 1) + g.ix.astype(np.int64) // FIELD_TILE
         return cls.numbered(navmesh, np.lexsort((np.arange(len(g.z)), g.ix % FIELD_TILE, g.iy % FIELD_TILE, tiles)))
 
     @classmethod
-    def numbered(cls, navmesh: NavMesh, order: np.ndarray) -> FieldSpace:
+    def numbered(cls, navmesh: NavCells, order: np.ndarray) -> FieldSpace:
         """The cells of `navmesh` numbered by `order` (order[k]: the cell of field index k, a permutation)."""
         g = navmesh._grid
         order = np.asarray(order).astype(np.int32)
@@ -108,7 +105,7 @@ class DistanceField:
     Build with `NavMesh.distance_field(targets)`. Points are (x, y, z) at the agent's feet, canonical frame.
     """
 
-    def __init__(self, navmesh: NavMesh, targets: np.ndarray) -> None:
+    def __init__(self, navmesh: NavCells, space: FieldSpace, targets: np.ndarray) -> None:
         self.navmesh = navmesh
         g = navmesh._grid
         targets = np.atleast_2d(np.asarray(targets, dtype=np.float64))
@@ -126,7 +123,7 @@ class DistanceField:
         self._tpos = np.ascontiguousarray(tpos)
         self._tpos_surface = tpos.copy()
         self._tpos_surface[:, 2] = g.z[safe]
-        sp = self._space = navmesh._field_space()
+        sp = self._space = space
         #: the targets' nodes in field indices (-1 where off the navmesh)
         self._tnodes = sp.to_field(nodes)
         g_, anchor, root, klo, khi, done, hk, hv, pos, size = _field.seed(sp.links, sp.ax, sp.ay, sp.zs, self._tnodes,
@@ -231,7 +228,7 @@ class DistanceField:
         return _keep_on_navmesh(nm, _dedupe(np.array(out)), int(g.island[cell]))
 
 
-def _keep_on_navmesh(nm: NavMesh, path: np.ndarray, island: int, rounds: int = 4) -> np.ndarray:
+def _keep_on_navmesh(nm: NavCells, path: np.ndarray, island: int, rounds: int = 4) -> np.ndarray:
     """Insert waypoints where a segment grazes a cell that is not navigable.
 
     Distances run through points on the agent-radius contour; a straight segment between two of them can clip

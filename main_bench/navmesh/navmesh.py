@@ -5,7 +5,6 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import math
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,16 +14,14 @@ import numpy as np
 
 from ..errors import NavMeshError
 from ..io import atomic_path
-from . import _field
 from .build import ALGORITHM_VERSION, Grid, build_grid, column_starts, find_floors
+from .cells import NavCells
 from .field import SNAP_RADIUS, DistanceField, FieldSpace
 from .settings import NavMeshSettings
 
 #: Version of the navmesh file layout (2: links stored relative to their node, 0 for none: 25x smaller files;
 #: version 1 files, absolute links, are still read).
 SCHEMA_VERSION = 2
-#: A point matches a surface at most this far above the point (m) ...
-_ABOVE_EXTRA = 0.05
 
 
 @dataclass(frozen=True)
@@ -98,37 +95,25 @@ def _absolute_links(rel: np.ndarray) -> np.ndarray:
     return np.where(rel != 0, rel + own, -1)
 
 
-class NavMesh:
-    """Walkable cells of a scene (a 2.5D grid of cell_size squares, several layers per column).
-
-    Points are (x, y, z) at the agent's feet in the canonical frame (+Z up, metres). A point matches the
-    surface in its column whose height is nearest, within max_climb + 5 cm above the point or agent_height
-    below it.
+class NavMesh(NavCells):
+    """Walkable cells of a scene (`NavCells`: a 2.5D grid of cell_size squares, several layers per column, and
+    the point queries on them) with their floors, islands and geodesic distances, built from a scene or read
+    from a file.
     """
 
     def __init__(self, grid: Grid, settings: NavMeshSettings, scene_id: str, scene_hash: str,
                  geom_hash: str, floors: list[tuple[float, float]] | None = None) -> None:
-        self._grid = grid
-        self.settings = settings
+        super().__init__(grid, settings)
         self.scene_id = scene_id
         self.scene_hash = scene_hash
         self.geometry_hash = geom_hash
         #: The build algorithm's version (a loaded file's own; see `build_key`).
         self.algorithm_version = ALGORITHM_VERSION
-        cs = grid.cell_size
-        self._px = grid.x0 + (grid.ix + 0.5) * cs
-        self._py = grid.y0 + (grid.iy + 0.5) * cs
-        # points distances are measured through: cell centres, moved onto the agent_radius contour near walls
-        self._ax = self._px + (grid.ox if grid.ox is not None else 0.0)
-        self._ay = self._py + (grid.oy if grid.oy is not None else 0.0)
-        self._below = settings.max_climb + _ABOVE_EXTRA
-        self._above = settings.agent_height
         if floors is None:
-            floors = find_floors(grid.z, cs * cs, settings)
+            floors = find_floors(grid.z, grid.cell_size * grid.cell_size, settings)
         self.floors: tuple[Floor, ...] = tuple(Floor(i, z, a) for i, (z, a) in enumerate(floors))
         self._floor_z = np.array([f.z for f in self.floors])
         self.islands: tuple[Island, ...] = self._make_islands()
-        self._snap_sets: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._space: FieldSpace | None = None
 
     # ----------------------------------------------------------------- building and files
@@ -283,11 +268,6 @@ class NavMesh:
         """Total walkable area, m^2 (horizontal projection)."""
         return float(len(self._grid.z) * self._grid.cell_size ** 2)
 
-    @property
-    def cell_size(self) -> float:
-        """Grid cell size, m."""
-        return self._grid.cell_size
-
     def info(self) -> dict[str, Any]:
         """JSON-ready summary: settings, scene, area, floors, islands."""
         return {"scene_id": self.scene_id, "scene_hash": self.scene_hash, "settings": self.settings.to_json(),
@@ -325,34 +305,6 @@ class NavMesh:
         return self._grid.ix.copy(), self._grid.iy.copy()
 
     # ----------------------------------------------------------------- point queries
-    def _points(self, points: np.ndarray) -> np.ndarray:
-        pts = np.asarray(points, dtype=np.float64)
-        if pts.ndim == 1:
-            pts = pts.reshape(1, -1)
-        if pts.ndim != 2 or pts.shape[1] != 3:
-            raise ValueError(f"points must be (3,) or (N, 3), got shape {np.shape(points)}")
-        return np.ascontiguousarray(pts)
-
-    def _locate(self, pts: np.ndarray) -> np.ndarray:
-        g = self._grid
-        return _field.locate(pts, g.x0, g.y0, g.cell_size, g.nx, g.ny, g.col_start, g.z, self._below, self._above)
-
-    def _nodes_of(self, pts: np.ndarray, snap_radius: float = 0.0, allowed: np.ndarray | None = None) -> np.ndarray:
-        """Node of each point; with snap_radius > 0, off-mesh points take the nearest node within it."""
-        pts = self._points(pts)
-        nodes = self._locate(pts)
-        if snap_radius > 0 and ((nodes < 0).any() or allowed is not None):
-            g = self._grid
-            if allowed is None:
-                allowed = np.ones(len(g.z), np.bool_)
-            nodes = _field.locate_near(pts, nodes, g.x0, g.y0, g.cell_size, g.nx, g.ny, g.col_start, g.z,
-                                       self._below, self._above, snap_radius, allowed)
-        return nodes
-
-    def is_navigable(self, points: np.ndarray) -> np.ndarray:
-        """(N,) bool: the point lies on a navigable cell (height within the matching tolerance)."""
-        return self._locate(self._points(points)) >= 0
-
     def island_of(self, points: np.ndarray) -> np.ndarray:
         """(N,) island index of each point, -1 where off the navmesh."""
         nodes = self._locate(self._points(points))
@@ -365,48 +317,6 @@ class NavMesh:
             return np.full(len(pts), -1, np.int64)
         idx = np.searchsorted(self._floor_z, pts[:, 2] + self._below, side="right") - 1
         return idx.astype(np.int64)
-
-    def snap(self, points: np.ndarray, island: int | None = None, max_distance: float = math.inf) -> np.ndarray:
-        """(N, 3) nearest navigable point (3D distance) to each point, optionally on one island; NaN rows where
-        nothing lies within max_distance (m)."""
-        pts = self._points(points)
-        g = self._grid
-        out = np.full_like(pts, np.nan)
-        nodes = self._locate(pts)
-        if island is not None:
-            self._check_island(island)
-            nodes = np.where((nodes >= 0) & (g.island[np.maximum(nodes, 0)] == island), nodes, -1)
-        on = nodes >= 0
-        if not on.all():
-            bound = max_distance + g.cell_size if math.isfinite(max_distance) else np.inf
-            allowed, box = self._snap_cells(island)
-            nodes[~on] = _field.nearest_cells(pts[~on], g.x0, g.y0, g.cell_size, g.nx, g.col_start, g.z, allowed,
-                                              box, bound)
-        ok = nodes >= 0
-        n = nodes[ok]
-        cs = g.cell_size
-        out[ok, 0] = np.clip(pts[ok, 0], g.x0 + g.ix[n] * cs, g.x0 + (g.ix[n] + 1) * cs - 1e-9)
-        out[ok, 1] = np.clip(pts[ok, 1], g.y0 + g.iy[n] * cs, g.y0 + (g.iy[n] + 1) * cs - 1e-9)
-        out[ok, 2] = g.z[n]
-        far = np.linalg.norm(out - pts, axis=1) > max_distance
-        out[far] = np.nan
-        return out
-
-    def _check_island(self, island: int) -> None:
-        if not 0 <= int(island) < len(self.islands):
-            raise NavMeshError(f"island {island} does not exist; this navmesh has islands 0..{len(self.islands) - 1}")
-
-    def _snap_cells(self, island: int | None) -> tuple[np.ndarray, np.ndarray]:
-        """The cells `snap` may answer with (those of `island`, or all): (C,) bool and the columns that hold them,
-        (ix0, ix1, iy0, iy1); made once per island."""
-        key = -1 if island is None else int(island)
-        if key not in self._snap_sets:
-            g = self._grid
-            allowed = np.ones(len(g.z), np.bool_) if island is None else g.island == key
-            ix, iy = g.ix[allowed], g.iy[allowed]
-            box = np.array([ix.min(), ix.max(), iy.min(), iy.max()] if len(ix) else [0, -1, 0, -1], np.int64)
-            self._snap_sets[key] = (allowed, box)
-        return self._snap_sets[key]
 
     def sample(self, n: int, rng: np.random.Generator, island: int | None = None) -> np.ndarray:
         """(n, 3) points uniform over the navigable area (of one island if given), at surface height."""
@@ -435,7 +345,7 @@ class NavMesh:
 
         Targets up to 0.5 m off the navmesh are snapped to the nearest navigable cell on their level.
         """
-        return DistanceField(self, self._points(targets))
+        return DistanceField(self, self._field_space(), self._points(targets))
 
     def geodesic_distance(self, a: np.ndarray, b: np.ndarray) -> float | np.ndarray:
         """Geodesic distance (m) from a to b: (3,) and (3,) -> float; (N, 3) and (3,) -> (N,); (N, 3) and

@@ -1,6 +1,7 @@
 """Headless multi-agent simulator: pybullet collisions and batched egocentric RGB-D rendering (gl or tiny)."""
 
-from .render.base import Renderer, check_render_output, make_renderer
+from .render.base import make_renderer
+from .render.protocol import Renderer, check_render_output
 from .settings import CameraSettings, SimSettings
 from .simulator import FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT, Simulator, StepOutcome
 

@@ -23,7 +23,8 @@ from ..errors import InputError
 from ..scenes.loader import Scene
 from .motion import ForwardMover
 from .physics import PhysicsWorld
-from .render.base import Renderer, make_renderer
+from .render.base import make_renderer
+from .render.protocol import Renderer
 from .settings import SimSettings
 
 FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT = 0, 1, 2, 3

@@ -34,7 +34,7 @@ TASK_NAMES = ("shared", "individual")
 class TaskRules:
     """The rule settings of one data set: the sub-task, max steps per agent, and `success_distance`: the geodesic
     distance (metres) to the agent's target within which a `found` call is correct (the evaluator's targets are
-    success regions and this is their tolerance, one navmesh cell; `task_rules.rules_from_manifest`)."""
+    success regions and this is their tolerance, one navmesh cell; `from_manifest.rules_from_manifest`)."""
 
     task: str
     success_distance: float = 1.0

@@ -1,7 +1,7 @@
 """The MAIN paper's model family (§4) for the seven `--algo` values, in one self-contained file.
 
-Self-contained on purpose (imports only numpy, torch and the numpy-only `obs.py` beside it): a trained
-submission directory holds copies of both next to its `policy.py` (the copy's import of `obs` made absolute),
+Self-contained on purpose (imports only numpy, torch and the numpy-only observation packing, `vector/obs.py`): a
+trained submission directory holds copies of both next to its `policy.py` (the copy imports its sibling `obs`),
 so the evaluator's isolated policy process needs nothing from main_bench.
 
 Flow per step for a (B, N) block of agents (B sub-environments of an N-agent team):
@@ -24,7 +24,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from .obs import MAX_DEPTH_MM, VEC, pack_observation  # a submission's copy imports its sibling obs.py
+from ..vector.obs import MAX_DEPTH_MM, VEC, pack_observation  # a submission's copy imports its sibling obs.py
 
 ALGOS = ("multi-ppo", "ippo", "mappo", "comm-s", "comm-v", "comm-rm", "comm-rv")
 COMM_ALGOS = ALGOS[3:]

@@ -38,7 +38,7 @@ def point_goal_dataset(src: str | Path, out: str | Path, *, overwrite: bool = Fa
     gets a line per (task, team size, split) done: its episodes and the seconds so far."""
     from ..episodes.manifest import read_manifest
     from ..evaluation.run.resources import EpisodeResources
-    from ..evaluation.scoring.task_rules import sim_settings_from_manifest
+    from ..sim.from_manifest import sim_settings_from_manifest
 
     manifest = read_manifest(src)
     resources = EpisodeResources(manifest, sim_settings_from_manifest(manifest, "auto"),

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..vector.obs import VEC
+
 OBS_KEYS = ("depth", "rgb", "vec", "inbox", "inbox_len")
 
 
@@ -29,8 +31,6 @@ class StorageShape:
 
     def fields(self) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
         """Every stored array's shape and dtype."""
-        from .obs import VEC
-
         t, b, n, s, h, f = self.steps, self.envs, self.agents, self.image_size, self.hidden, self.message_floats
         out = {
             "depth": ((t, b, n, s, s), np.dtype(np.uint16)),

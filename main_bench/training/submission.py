@@ -18,8 +18,8 @@ from ..io import atomic_write_bytes, atomic_write_json, atomic_write_text
 from ..portable import manifest_hash, portable_command, portable_path, project_root
 
 METADATA_VERSION = 1
-#: model.py's import of its observation packing, as written in the package and in a submission's copy.
-SIBLING_IMPORT = ("from .obs import ", "from obs import ")
+#: model.py's import of the observation packing, as written in the package and in a submission's copy.
+SIBLING_IMPORT = ("from ..vector.obs import ", "from obs import ")
 WEIGHTS = "weights.pt"
 
 POLICY_PY = '''"""A main-bench agent policy trained with `main-bench train` ({algo}); run it with --mode {mode}.
@@ -52,7 +52,7 @@ def write_submission(folder: str | Path, net: Any, settings: Any, command: str, 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     here = Path(__file__).resolve().parent
-    shutil.copyfile(here / "obs.py", folder / "obs.py")
+    shutil.copyfile(here.parent / "vector" / "obs.py", folder / "obs.py")
     model = (here / "model.py").read_text(encoding="utf-8")
     atomic_write_text(folder / "model.py", model.replace(SIBLING_IMPORT[0], SIBLING_IMPORT[1], 1))
     atomic_write_text(folder / "policy.py", POLICY_PY.format(algo=settings.algo, mode=settings.mode))

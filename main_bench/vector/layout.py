@@ -2,7 +2,7 @@
 
 Flows: the trainer writes `actions` (B, N) and `messages` (B, N, F) and the sub-environments write everything
 else, after every lock-step: the agents' packed observations (`depth` uint16 millimetres, `rgb` uint8 when used,
-`vec` the goal vector of `training.model.goal_vector`, the `inbox`), per agent `reward`, `done` (its episode
+`vec` the goal vector of `obs.goal_vector`, the `inbox`), per agent `reward`, `done` (its episode
 ended on this step, or it had already left), `alive` (it acts on the next step), `first` (the observation
 starts an episode), `in_region` (the agent stands in its target's success region: a `found` now would be
 correct; the env's `in_success_region` info, for training-only auxiliary losses), and per sub-environment numeric episode statistics written on the step that ended it
@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from .obs import VEC
 
 EPISODE_STATS = ("ep_end", "ep_team_success", "ep_success", "ep_spl", "ep_return", "ep_length")
 
@@ -54,8 +56,6 @@ class VecSpec:
 def layout(spec: VecSpec) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
     """Every shared array's shape and dtype."""
     b, n, s, f = spec.num_envs, spec.agents, spec.image_size, max(spec.message_floats, 1)
-    from ..training.obs import VEC
-
     out: dict[str, tuple[tuple[int, ...], np.dtype]] = {
         "depth": ((b, n, s, s), np.dtype(np.uint16)),
         "vec": ((b, n, VEC), np.dtype(np.float32)),
@@ -74,6 +74,12 @@ def layout(spec: VecSpec) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
     if spec.use_rgb:
         out["rgb"] = ((b, n, s, s, 3), np.dtype(np.uint8))
     return out
+
+
+def split_rows(num_envs: int, workers: int) -> list[list[int]]:
+    """Sub-environment indices of each worker: contiguous, as even as possible, no empty worker."""
+    workers = max(1, min(workers, num_envs))
+    return [list(part) for part in np.array_split(np.arange(num_envs), workers)]
 
 
 def allocate(spec: VecSpec) -> dict[str, np.ndarray]:

@@ -8,8 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from .layout import VecSpec, allocate
-from .sampler import split_rows
+from .layout import VecSpec, allocate, split_rows
 from .slot import SubEnv
 
 DRIVER_KEYS = ("actions", "messages")

@@ -22,7 +22,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..worker_threads import single_threaded_children
-from .layout import VecSpec, allocate, layout
+from .layout import VecSpec, allocate, layout, split_rows
+from .ray_sampler import RaySampler
 from .slot import SubEnv
 
 BACKENDS = ("process", "inline", "ray")
@@ -42,12 +43,6 @@ class Sampler(Protocol):
 
     def close(self) -> None:
         """Stop the workers and free the memory."""
-
-
-def split_rows(num_envs: int, workers: int) -> list[list[int]]:
-    """Sub-environment indices of each worker: contiguous, as even as possible, no empty worker."""
-    workers = max(1, min(workers, num_envs))
-    return [list(part) for part in np.array_split(np.arange(num_envs), workers)]
 
 
 class InlineSampler:
@@ -180,7 +175,5 @@ def make_sampler(spec: VecSpec, backend: str = "process", workers: int = 2) -> S
     if backend == "inline":
         return InlineSampler(spec)
     if backend == "ray":
-        from .ray_sampler import RaySampler
-
         return RaySampler(spec, workers)
     raise InputError(f"sampler backend must be one of {', '.join(BACKENDS)}, got {backend!r}")

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from ..training.obs import pack_observation
 from .layout import EPISODE_STATS, VecSpec
+from .obs import pack_observation
 
 
 class SubEnv:

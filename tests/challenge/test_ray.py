@@ -10,8 +10,8 @@ from ch_server import RANDOM_AGENT, Server, add_team, cli_json, make_challenge, 
 from mb_testing import need
 
 from main_bench.challenge.queue import scores_of
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings, PolicyLimits
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings, PolicyLimits
 
 
 @pytest.mark.slow

@@ -14,8 +14,8 @@ from mb_testing import chromium, console_lines
 from PIL import Image
 
 from main_bench.challenge.queue import scores_of
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings, PolicyLimits
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings, PolicyLimits
 
 
 @pytest.fixture(scope="module")

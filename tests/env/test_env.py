@@ -12,8 +12,8 @@ from pettingzoo.test import parallel_api_test, parallel_seed_test
 from main_bench.env import MainParallelEnv, RewardSettings, create
 from main_bench.errors import DatasetError, InputError
 from main_bench.evaluation.baselines import OracleBaseline
-from main_bench.evaluation.episode_loop import EpisodeWorld
-from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo
+from main_bench.evaluation.play.episode_loop import EpisodeWorld
+from main_bench.evaluation.policy.protocol import EpisodeInfo, TargetInfo
 
 SMALL = 32
 

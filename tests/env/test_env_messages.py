@@ -14,8 +14,8 @@ from pettingzoo.test import parallel_api_test
 
 from main_bench.env import create
 from main_bench.errors import InputError
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings
 
 TEMPLATE = Path(__file__).parent / "policies" / "tiny_linear"
 FLOATS = 8

@@ -7,7 +7,14 @@ import math
 import numpy as np
 
 from main_bench.evaluation.baselines import OracleBaseline, RandomBaseline, privileged_baseline
-from main_bench.evaluation.protocol import FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT, EpisodeInfo, TargetInfo
+from main_bench.evaluation.policy.protocol import (
+    FOUND,
+    MOVE_FORWARD,
+    TURN_LEFT,
+    TURN_RIGHT,
+    EpisodeInfo,
+    TargetInfo,
+)
 
 
 class ToyWorld:

@@ -43,7 +43,7 @@ def test_chunks_never_span_two_scenes_and_keep_every_episode_once():
 
 
 def test_a_run_of_another_chunking_rule_is_a_different_evaluation(tmp_path):
-    from main_bench.evaluation.settings import CHUNKING, EvalSettings
+    from main_bench.evaluation.run.settings import CHUNKING, EvalSettings
 
     identity = EvalSettings(episodes=tmp_path, split="val", agent="baseline:random", out=tmp_path).identity()
     assert identity["chunking"] == CHUNKING == 2

@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 import torch
 
-from main_bench.evaluation.channel import BROADCAST, Channel, MessageError, check_message, describe_message
+from main_bench.evaluation.play.channel import (
+    BROADCAST,
+    Channel,
+    MessageError,
+    check_message,
+    describe_message,
+)
 
 IDS = ("agent_0", "agent_1", "agent_2")
 

@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from main_bench.errors import InputError, SubmissionError
-from main_bench.evaluation.check import (
+from main_bench.evaluation.policy.check import (
     CHECK_NAMES,
     CheckSettings,
     check_policy,
     synthetic_episode_info,
     synthetic_observations,
 )
-from main_bench.evaluation.protocol import observation_space
+from main_bench.evaluation.policy.protocol import observation_space
 
 POLICIES = Path(__file__).parent / "policies"
 QUICK = CheckSettings(steps=4, width=32, height=32)

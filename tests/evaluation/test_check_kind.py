@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 
 from main_bench.errors import InputError
-from main_bench.evaluation.check import CheckSettings, mode_for, policy_kind
+from main_bench.evaluation.policy.check import CheckSettings, mode_for, policy_kind
+from main_bench.evaluation.policy.submission import parse_spec
 from main_bench.evaluation.process.sandbox import SandboxSettings
-from main_bench.evaluation.submission import parse_spec
 
 POLICIES = Path(__file__).parent / "policies"
 TALKER = f"{POLICIES / 'talker.py'}:Talker"

@@ -10,12 +10,12 @@ import pytest
 import torch  # in the test extra: CI has it
 
 from main_bench.errors import SubmissionError
-from main_bench.evaluation.channel import empty_inbox
-from main_bench.evaluation.check import CheckSettings, check_policy
-from main_bench.evaluation.protocol import AgentInfo, TargetInfo, agent_ids
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings
-from main_bench.evaluation.submission import load_policy, parse_spec
+from main_bench.evaluation.play.channel import empty_inbox
+from main_bench.evaluation.policy.check import CheckSettings, check_policy
+from main_bench.evaluation.policy.protocol import AgentInfo, TargetInfo, agent_ids
+from main_bench.evaluation.policy.submission import load_policy, parse_spec
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings
 
 IDS = agent_ids(2)
 

@@ -19,12 +19,12 @@ import pytest
 
 from main_bench.episodes.dataset import load_episodes
 from main_bench.errors import DatasetError, PolicyFailure
-from main_bench.evaluation.episode_loop import target_observations
-from main_bench.evaluation.records import TEAM
-from main_bench.evaluation.results import _read, load_results
-from main_bench.evaluation.runner import evaluate
+from main_bench.evaluation.output.records import TEAM
+from main_bench.evaluation.output.results import _read, load_results
+from main_bench.evaluation.play.episode_loop import target_observations
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings, PolicyLimits
 from main_bench.evaluation.scoring.metrics import episode_metrics, trace_from_frame
-from main_bench.evaluation.settings import EvalSettings, PolicyLimits
 
 POLICIES = Path(__file__).parent / "policies"
 WALKER = str(POLICIES / "short_walk.py")
@@ -349,7 +349,7 @@ def test_forked_workers_start_with_the_command_s_objects_frozen_until_they_are_c
     process, as the command line is."""
     dataset, cache = tiny_dataset
     code = ("import gc, json, sys\n"
-            "from main_bench.evaluation.settings import EvalSettings\n"
+            "from main_bench.evaluation.run.settings import EvalSettings\n"
             "from main_bench.evaluation.run.executors import LocalWorkers\n"
             f"s = EvalSettings(episodes={str(dataset)!r}, split='val', agent={WALKER!r}, out={str(tmp_path / 'o')!r},"
             f" limit=4, chunk_size=2, cache_dir={str(cache)!r})\n"
@@ -421,7 +421,7 @@ def test_workers_started_before_planning_stop_on_bad_input(tiny_dataset, tmp_pat
 
 def test_a_started_pool_runs_the_chunks_it_is_given(reference, tiny_dataset, tmp_path):
     from main_bench.evaluation.run.executors import LocalWorkers
-    from main_bench.evaluation.runner import plan
+    from main_bench.evaluation.run.runner import plan
 
     out = tmp_path / "pool"
     settings = _settings(tiny_dataset, out, workers=3)
@@ -437,7 +437,7 @@ def test_a_started_pool_runs_the_chunks_it_is_given(reference, tiny_dataset, tmp
 
 
 def test_the_planner_runs_a_scenes_heaviest_chunks_first(tmp_path):
-    from main_bench.evaluation.runner import plan
+    from main_bench.evaluation.run.runner import plan
 
     sample = Path(__file__).resolve().parents[2] / "episodes" / "sample"
     _, chunks = plan(EvalSettings(episodes=sample, split="val", agent="baseline:oracle", out=tmp_path / "plan"))

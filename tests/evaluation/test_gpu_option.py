@@ -8,7 +8,7 @@ from mb_testing import need
 from main_bench.errors import InputError
 from main_bench.evaluation.process.isolation import Limits
 from main_bench.evaluation.process.policy_child import TORCH_DEVICE_VAR
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.evaluation.run.settings import EvalSettings
 from main_bench.sim.render import gl as gl_backend
 
 
@@ -45,8 +45,8 @@ def test_gpu_setting_reaches_the_renderer_and_the_policy_process(tmp_path):
 
 def test_policy_process_gets_the_torch_device(tmp_path):
     """The policy process sees MAIN_BENCH_TORCH_DEVICE when Limits.torch_device is set."""
+    from main_bench.evaluation.policy.submission import parse_spec
     from main_bench.evaluation.process.isolation import PolicyProcess
-    from main_bench.evaluation.submission import parse_spec
 
     policy = tmp_path / "env_policy.py"
     policy.write_text(
@@ -55,7 +55,7 @@ def test_policy_process_gets_the_torch_device(tmp_path):
         f"        code = 1 if os.environ.get({TORCH_DEVICE_VAR!r}) == 'cuda:7' else 2\n"
         "        return {a: code for a in observations}\n\n\n"
         "def make_policy(root, seed=0):\n    return P()\n")
-    from main_bench.evaluation.protocol import EpisodeInfo  # noqa: F401 - the child decodes it
+    from main_bench.evaluation.policy.protocol import EpisodeInfo  # noqa: F401 - the child decodes it
 
     with PolicyProcess(parse_spec(str(policy)), Limits(torch_device="cuda:7")) as proc:
         assert proc.act({"agent_0": {}}) == {"agent_0": 1}

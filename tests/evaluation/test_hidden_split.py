@@ -17,11 +17,11 @@ import pytest
 from eval_data import build_tiny_dataset
 
 from main_bench.episodes.dataset import load_episodes
-from main_bench.evaluation.episode_loop import target_observations
-from main_bench.evaluation.protocol import agent_ids
-from main_bench.evaluation.results import _read
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.evaluation.output.results import _read
+from main_bench.evaluation.play.episode_loop import target_observations
+from main_bench.evaluation.policy.protocol import agent_ids
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings
 
 REPLAY = Path(__file__).parent / "policies" / "replay"
 TASKS = ("shared", "individual")

@@ -22,9 +22,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from main_bench.evaluation.agents import DecentralizedTeam, ProcessEndpoint
-from main_bench.evaluation.channel import MessageError, check_message
-from main_bench.evaluation.episode_loop import EpisodeFailure
+from main_bench.evaluation.output.records import TEAM
+from main_bench.evaluation.output.results import _read
+from main_bench.evaluation.play.agents import DecentralizedTeam, ProcessEndpoint
+from main_bench.evaluation.play.channel import MessageError, check_message
+from main_bench.evaluation.play.episode_loop import EpisodeFailure
+from main_bench.evaluation.policy.protocol import EpisodeInfo, TargetInfo, agent_ids
+from main_bench.evaluation.policy.submission import parse_spec
 from main_bench.evaluation.process.ipc import recv_reply
 from main_bench.evaluation.process.isolation import (
     REASON_KINDS,
@@ -36,12 +40,8 @@ from main_bench.evaluation.process.isolation import (
     validate_agent_answer,
 )
 from main_bench.evaluation.process.sandbox import SandboxSettings
-from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo, agent_ids
-from main_bench.evaluation.records import TEAM
-from main_bench.evaluation.results import _read
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings
-from main_bench.evaluation.submission import parse_spec
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings
 
 FORGER = str(Path(__file__).parent / "policies" / "forged_replies.py")
 IDS = agent_ids(2)

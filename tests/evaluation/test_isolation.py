@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from main_bench.errors import InputError, SubmissionError
+from main_bench.evaluation.policy.protocol import EpisodeInfo, TargetInfo, agent_ids
+from main_bench.evaluation.policy.submission import ProtocolError, parse_spec
 from main_bench.evaluation.process.isolation import Limits, PolicyError, PolicyProcess, validate_actions
 from main_bench.evaluation.process.policy_child import encode_actions
-from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo, agent_ids
-from main_bench.evaluation.submission import ProtocolError, parse_spec
 
 POLICIES = Path(__file__).parent / "policies"
 FAST = Limits(step_seconds=10.0, reset_seconds=10.0, episode_seconds=60.0, load_seconds=60.0)

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from main_bench.evaluation.policy.protocol import EpisodeInfo, TargetInfo, agent_ids
+from main_bench.evaluation.policy.submission import parse_spec
 from main_bench.evaluation.process.isolation import Limits, PolicyError, PolicyProcess
-from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo, agent_ids
-from main_bench.evaluation.submission import parse_spec
 
 POLICIES = Path(__file__).parent / "policies"
 LIMITS = Limits(step_seconds=3.0, reset_seconds=10.0, episode_seconds=60.0, memory_mb=384, load_seconds=60.0)

@@ -14,10 +14,10 @@ import pytest
 from mb_testing import need
 
 from main_bench.errors import SubmissionError
-from main_bench.evaluation.records import TEAM
-from main_bench.evaluation.results import _read, load_results
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.evaluation.output.records import TEAM
+from main_bench.evaluation.output.results import _read, load_results
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings
 
 POLICIES = Path(__file__).parent / "policies"
 TALKER = POLICIES / "talker.py"

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from main_bench.evaluation.run.executors import Progress, ProgressBatch, run_local
-from main_bench.evaluation.runner import evaluate, plan
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.evaluation.run.runner import evaluate, plan
+from main_bench.evaluation.run.settings import EvalSettings
 
 WALKER = str(Path(__file__).parent / "policies" / "short_walk.py")
 

@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 
 from main_bench.errors import ResultsError
-from main_bench.evaluation.results import load_results
-from main_bench.evaluation.runner import evaluate
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.evaluation.output.results import load_results
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings
 
 
 @pytest.fixture(scope="module")

@@ -19,13 +19,13 @@ import pandas as pd
 import pytest
 from mb_testing import need
 
-from main_bench.evaluation.check import CheckSettings, synthetic_episode_info, synthetic_observations
+from main_bench.evaluation.output.records import TEAM
+from main_bench.evaluation.output.results import _read, load_results
+from main_bench.evaluation.policy.check import CheckSettings, synthetic_episode_info, synthetic_observations
+from main_bench.evaluation.policy.submission import parse_spec
 from main_bench.evaluation.process.isolation import Limits, PolicyProcess
 from main_bench.evaluation.process.isolation_check import Trap
 from main_bench.evaluation.process.sandbox import SANDBOX_ENV, SandboxSettings, sandbox_problem
-from main_bench.evaluation.records import TEAM
-from main_bench.evaluation.results import _read, load_results
-from main_bench.evaluation.submission import parse_spec
 
 POLICIES = Path(__file__).parent / "policies"
 GOOD = str(POLICIES / "good_random.py")
@@ -201,7 +201,7 @@ def test_no_bubblewrap_refuses_in_one_line_unless_no_sandbox(tiny_dataset, tmp_p
 def test_an_evaluation_hides_its_data_set_results_cache_and_scene_folders(tiny_dataset, tmp_path):
     from main_bench.episodes.dataset import read_manifest
     from main_bench.evaluation.process.sandbox import evaluation_sandbox
-    from main_bench.evaluation.settings import EvalSettings
+    from main_bench.evaluation.run.settings import EvalSettings
 
     dataset, cache = tiny_dataset
     manifest = read_manifest(dataset)

@@ -1,4 +1,4 @@
-"""Submission specs and in-process loading (`main_bench.evaluation.submission`)."""
+"""Submission specs and in-process loading (`main_bench.evaluation.policy.submission`)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from main_bench.errors import SubmissionError
-from main_bench.evaluation.protocol import TeamPolicy
-from main_bench.evaluation.submission import (
+from main_bench.evaluation.policy.protocol import TeamPolicy
+from main_bench.evaluation.policy.submission import (
     PolicySpec,
     ProtocolError,
     load_policy,

@@ -9,8 +9,9 @@ import pyarrow.parquet as pq
 import trimesh
 
 from main_bench.episodes.manifest import read_manifest
-from main_bench.evaluation.scoring.task_rules import rules_json, sim_settings_from_manifest
 from main_bench.sim import synthetic
+from main_bench.sim.from_manifest import sim_settings_from_manifest
+from main_bench.task_rules import rules_json
 
 
 def test_generate_records_the_task_and_evaluate_uses_it(cli, tmp_path):

@@ -13,16 +13,17 @@ import pandas as pd
 import pytest
 
 from main_bench.episodes.dataset import load_episodes, read_manifest
-from main_bench.evaluation.results import _read
+from main_bench.evaluation.output.results import _read
 from main_bench.evaluation.run.chunks import make_chunks
 from main_bench.evaluation.run.resources import EpisodeResources
+from main_bench.evaluation.run.runner import evaluate
+from main_bench.evaluation.run.settings import EvalSettings
 from main_bench.evaluation.run.subset import allocate, stratified_sample
-from main_bench.evaluation.runner import evaluate
 from main_bench.evaluation.scoring.intervals import cluster_bootstrap_ci, paired_difference, wilson_interval
 from main_bench.evaluation.scoring.metrics import EpisodeTrace, episode_metrics
 from main_bench.evaluation.scoring.summary import track_stats
-from main_bench.evaluation.scoring.task_rules import found_tolerance, sim_settings_from_manifest
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.sim.from_manifest import sim_settings_from_manifest
+from main_bench.task_rules import found_tolerance
 
 
 def _densify(path: np.ndarray, step: float = 0.05) -> np.ndarray:

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 
 from main_bench.episodes.dataset import load_episodes
-from main_bench.evaluation.channel import describe_message
-from main_bench.evaluation.episode_loop import episode_seed, policy_seed
+from main_bench.evaluation.play.channel import describe_message
+from main_bench.evaluation.play.episode_loop import episode_seed, policy_seed
+from main_bench.evaluation.run.runner import plan
+from main_bench.evaluation.run.settings import EvalSettings
 from main_bench.evaluation.run.worker import WorkerContext
-from main_bench.evaluation.runner import plan
-from main_bench.evaluation.settings import EvalSettings
 
 SEED = 5
 
@@ -127,7 +127,7 @@ def test_no_field_a_policy_sees_names_its_episode(tiny_dataset, tmp_path, mode):
         if mode == "central":
             context._policy = log
         else:
-            from main_bench.evaluation.agents import DecentralizedTeam
+            from main_bench.evaluation.play.agents import DecentralizedTeam
 
             context._policy = DecentralizedTeam(lambda i: _AgentRecorder(log, mode == "comm"), mode, settings.channel_floats)
         for chunk in chunks:

@@ -17,7 +17,7 @@ from mb_testing import seal_results
 from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
-from main_bench.evaluation.records import (
+from main_bench.evaluation.output.records import (
     RECORD_SCHEMA,
     RESULTS_SCHEMA_VERSION,
     TEAM,

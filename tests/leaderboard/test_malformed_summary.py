@@ -10,8 +10,8 @@ import pytest
 from lb_fixtures import episodes_dir, make_results  # noqa: F401  (episodes_dir is a fixture)
 
 from main_bench.errors import SubmissionError
-from main_bench.evaluation.runner import submission_meta
-from main_bench.evaluation.settings import EvalSettings
+from main_bench.evaluation.run.runner import submission_meta
+from main_bench.evaluation.run.settings import EvalSettings
 
 # (field path in summary.json, wrong value, words of the message); None: the build may go on (exit 0)
 WRONG = [

@@ -148,7 +148,7 @@ def test_page_prints_the_summary_numbers(tmp_path, episodes_dir):
     (`build_summary` on the same records), printed in the one number format."""
     from html import escape
 
-    from main_bench.evaluation.results import load_results
+    from main_bench.evaluation.output.results import load_results
     from main_bench.evaluation.scoring.summary import build_summary
 
     r = make_results(tmp_path / "r", episodes_dir, "Summary check", 0.6, seed=5)

@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from main_bench.training.model import ALGOS, COMM_ALGOS, ModelConfig, Net, message_floats_for
-from main_bench.training.obs import VEC, goal_vector, pack_observation
+from main_bench.vector.obs import VEC, goal_vector, pack_observation
 
 SIZE, N, H = 16, 3, 16
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from main_bench.errors import InputError
-from main_bench.vector.layout import EPISODE_STATS, VecSpec, layout
-from main_bench.vector.sampler import ProcessSampler, make_sampler, split_rows
+from main_bench.vector.layout import EPISODE_STATS, VecSpec, layout, split_rows
+from main_bench.vector.sampler import ProcessSampler, make_sampler
 
 SMALL = 16
 
@@ -71,8 +71,8 @@ def test_arrays_are_compact_and_numeric(tiny_dataset):
 
 def test_agents_leave_individually_and_sub_envs_reset_themselves(tiny_dataset):
     from main_bench.evaluation.baselines import OracleBaseline
-    from main_bench.evaluation.episode_loop import EpisodeWorld
-    from main_bench.evaluation.protocol import EpisodeInfo, TargetInfo
+    from main_bench.evaluation.play.episode_loop import EpisodeWorld
+    from main_bench.evaluation.policy.protocol import EpisodeInfo, TargetInfo
 
     sampler = make_sampler(_spec(tiny_dataset, num_envs=1, task="individual"), "inline")
     try:

@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from ..channel import describe_message
-from ..protocol import TURN_LEFT, AgentInfo
+from ..play.channel import describe_message
+from ..policy.protocol import TURN_LEFT, AgentInfo
 from .oracle import OracleBaseline
 from .random import RandomBaseline
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..protocol import FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT, EpisodeInfo, Observation
+from ..policy.protocol import FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT, EpisodeInfo, Observation
 from .privileged import World, agent_index
 
 

@@ -11,7 +11,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..protocol import EpisodeInfo, Observation
+from ..policy.protocol import EpisodeInfo, Observation
 
 
 @runtime_checkable

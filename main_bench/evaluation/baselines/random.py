@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..protocol import FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT, EpisodeInfo, Observation
+from ..policy.protocol import FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT, EpisodeInfo, Observation
 from .privileged import World, agent_index
 
 MOVES = np.array([MOVE_FORWARD, TURN_LEFT, TURN_RIGHT])

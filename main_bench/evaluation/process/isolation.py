@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...errors import InputError, MainBenchError, SubmissionError
-from ..submission import PolicySpec, ProtocolError
+from ..policy.submission import PolicySpec, ProtocolError
 from .ipc import encode_request, recv_reply, send_parts
 from .policy_child import EXIT_OUT_OF_MEMORY, TORCH_DEVICE_VAR
 from .sandbox import SandboxSettings, launch, popen, signal_of_exit

@@ -44,7 +44,7 @@ def main(argv: list[str]) -> int:
     for entry in reversed(boot["sys_path"]):
         if entry not in sys.path:
             sys.path.insert(0, entry)
-    from .. import protocol  # noqa: F401 - decodes EpisodeInfo; our own code, imported before the memory limit
+    from ..policy import protocol  # noqa: F401 - decodes EpisodeInfo; our own code, imported before the memory limit
 
     _die_with_parent()
     _limit_memory(boot["memory_mb"])
@@ -83,7 +83,7 @@ def _die_with_parent() -> None:
 def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
     start = time.perf_counter()
     try:
-        from ..submission import PolicySpec, ProtocolError, load_policy, policy_roles
+        from ..policy.submission import PolicySpec, ProtocolError, load_policy, policy_roles
 
         spec = PolicySpec(*boot["spec"])
         try:
@@ -105,7 +105,7 @@ def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
 
 
 def _serve(sock: socket.socket, policy: Any, role: str) -> int:
-    from ..submission import seed_everything
+    from ..policy.submission import seed_everything
 
     while True:
         try:
@@ -159,7 +159,7 @@ def encode_agent_answer(result: Any) -> dict[str, Any]:
     `(action, message)`, or a bare action (no message). The action as `encode_actions` describes values, the
     message as `channel.describe_message` does; anything else is `{"not_pair": ...}`.
     """
-    from ..channel import describe_message
+    from ..play.channel import describe_message
 
     if isinstance(result, tuple | list) and len(result) == 2:
         action, message = result

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..records import partition_dir
+from ..output.records import partition_dir
 from .subset import stratified_sample
 
 

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...worker_threads import fork_is_safe, single_threaded_children
-from ..settings import EvalSettings
 from .chunks import Chunk
+from .settings import EvalSettings
 from .worker import WorkerContext
 
 OnMessage = Callable[[str, Any], None]

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ...episodes.schema import Episode
-from ..episode_loop import target_key
+from ..play.episode_loop import target_key
 
 #: Memory (MiB) of the target distance fields kept, least recently used dropped first (they are rebuilt on a
 #: miss; results do not depend on this). A field is counted as made: 65 bytes per navmesh cell with its open

@@ -19,15 +19,15 @@ import pyarrow as pa
 
 from ...episodes.schema import Episode
 from ...errors import DatasetError, PolicyFailure
-from .. import ledger
+from ...sim.from_manifest import rules_from_manifest, sim_settings_from_manifest
 from ..baselines import privileged_baseline
-from ..episode_loop import EpisodeFailure, LoopSettings, run_episode
-from ..records import RECORD_SCHEMA, TRAJECTORY_SCHEMA, write_part
+from ..output import ledger
+from ..output.records import RECORD_SCHEMA, TRAJECTORY_SCHEMA, write_part
+from ..play.episode_loop import EpisodeFailure, LoopSettings, run_episode
 from ..scoring.metrics import EpisodeTrace, episode_metrics
-from ..scoring.task_rules import rules_from_manifest, sim_settings_from_manifest
-from ..settings import EvalSettings
 from .chunks import Chunk
 from .resources import EpisodeResources
+from .settings import EvalSettings
 
 
 @dataclass(frozen=True)
@@ -48,9 +48,9 @@ class _IsolatedPolicy:
     uses_pixels = True
 
     def __init__(self, settings: EvalSettings, manifest: Any) -> None:
+        from ..policy.submission import parse_spec
         from ..process.isolation import PolicyProcess
         from ..process.sandbox import evaluation_sandbox
-        from ..submission import parse_spec
 
         sandbox = evaluation_sandbox(settings, manifest)
         self._proc = PolicyProcess(parse_spec(settings.agent), process_limits(settings), settings.seed, sandbox)
@@ -95,7 +95,7 @@ class WorkerContext:
     def _policy_for(self) -> Any:
         if self._policy is None:
             if self.settings.mode != "central":
-                from ..agents import DecentralizedTeam
+                from ..play.agents import DecentralizedTeam
 
                 make, self._privileged = agent_endpoints(self.settings, self.manifest)
                 self._policy = DecentralizedTeam(make, self.settings.mode, self.settings.channel_floats,
@@ -204,9 +204,9 @@ def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[in
 
         kind = next(k for k in PRIVILEGED if settings.agent.strip() == f"baseline:{k}")
         return (lambda i: PrivilegedAgent(kind, i, settings.seed)), True
-    from ..agents import ProcessEndpoint
+    from ..play.agents import ProcessEndpoint
+    from ..policy.submission import parse_spec
     from ..process.sandbox import evaluation_sandbox
-    from ..submission import parse_spec
 
     limits, spec, sandbox = process_limits(settings), parse_spec(settings.agent), evaluation_sandbox(settings, manifest)
     return (lambda i: ProcessEndpoint(spec, limits, settings.seed, sandbox)), False

@@ -1,5 +1,5 @@
-"""Scoring rules and metrics: the task rules read from a manifest, per-agent and team metrics as pure functions of
-records, bootstrap and Wilson intervals, and `summary.json`.
+"""Metrics: per-agent and team metrics as pure functions of records, bootstrap and Wilson intervals, and
+`summary.json` (the task rules they follow are `main_bench.task_rules`).
 
 Flows in: records (per agent, team and step) and the data set manifest. Flows out: metrics, intervals and the
 summary document.

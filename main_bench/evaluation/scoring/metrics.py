@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ...sim.task import deciding_agents, team_success
-from ..records import TEAM
+from ..output.records import TEAM
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..channel import communication_stats
-from ..records import RESULTS_SCHEMA_VERSION, TEAM
+from ..output.records import RESULTS_SCHEMA_VERSION, TEAM
+from ..play.channel import communication_stats
 from .intervals import cluster_bootstrap_ci, interval_seed, wilson_interval
 from .metrics import AGENT_METRICS, TEAM_METRICS
 

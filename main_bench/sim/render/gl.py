@@ -33,6 +33,7 @@ from .baked import baked_surfaces
 from .camera import NEAR_M, far_plane, focal_scales, view_axes
 from .culling import CellCuller
 from .materials import TEXTURE_SIZE, agent_colors, face_normals
+from .protocol import check_render_output
 from .viewports import ONE_PASS_GL, VIEWPORT_INDEX_EXTENSIONS, viewport_array_setter, viewport_index_extension
 
 #: Direction of the baked light (canonical frame); surfaces facing it or away from it are brightest.
@@ -544,8 +545,6 @@ class GLRenderer:
 
     def self_test(self) -> None:
         """Render one view and check its output; raises GLUnavailable when the context does not render."""
-        from .base import check_render_output
-
         try:
             rgb, depth = self.render(np.zeros((1, 3)), np.zeros(1))
         except Exception as exc:

@@ -106,7 +106,7 @@ class Honest:
     def _command_line_files(self, observation) -> list[str]:
         """Find a data set named on an ancestor's command line and match this agent's target to an episode."""
         from main_bench.episodes.dataset import load_episodes, read_manifest
-        from main_bench.evaluation.episode_loop import to_start_frame
+        from main_bench.evaluation.play.episode_loop import to_start_frame
 
         target = np.asarray(observation["target"], dtype=np.float32).reshape(-1)
         for pid in (os.getppid(), _parent_of(os.getppid())):

@@ -36,7 +36,7 @@ def read_rows() -> list[tuple[str, dict]]:
 
 def match(rows: list[tuple[str, dict]], target) -> tuple[str, list] | None:
     """(shard file, target_positions) of the row whose agent_0 point goal, in its start frame, is `target`."""
-    from main_bench.evaluation.episode_loop import to_start_frame
+    from main_bench.evaluation.play.episode_loop import to_start_frame
 
     seen = np.asarray(target, dtype=np.float64).reshape(-1)
     for path, row in rows:

@@ -29,14 +29,14 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import SubmissionError
-from ..suggest import did_you_mean
+from ...errors import SubmissionError
+from ...suggest import did_you_mean
 
 #: Attribute names tried, in order, when a spec names none.
 DEFAULT_ATTRS: tuple[str, ...] = ("make_policy", "Policy")
 POLICY_FILE = "policy.py"
 BASELINE_PREFIX = "baseline:"
-BASELINES_DIR = Path(__file__).resolve().parent / "baselines"
+BASELINES_DIR = Path(__file__).resolve().parents[1] / "baselines"
 
 SpecKind = Literal["module", "file", "directory"]
 
@@ -111,7 +111,7 @@ def _baseline_spec(text: str) -> PolicySpec:
     folder = BASELINES_DIR / name
     if name.isidentifier() and (folder / POLICY_FILE).is_file():
         return PolicySpec("directory", str((folder / POLICY_FILE).resolve()), "", folder.resolve())
-    from .baselines import PRIVILEGED
+    from ..baselines import PRIVILEGED
 
     if name in PRIVILEGED:
         raise SubmissionError(
@@ -131,7 +131,7 @@ def standalone_baselines() -> list[str]:
 
 def all_baselines() -> list[str]:
     """Every `baseline:NAME` name: the evaluator's built-in (privileged) ones and the standalone ones."""
-    from .baselines import PRIVILEGED
+    from ..baselines import PRIVILEGED
 
     return sorted({*PRIVILEGED, *standalone_baselines()})
 

@@ -15,11 +15,11 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import InputError, SubmissionError
-from ..scenes.objects import KNOWN_CATEGORIES
-from .process.isolation import Limits, PolicyError, PolicyProcess
-from .process.isolation_check import Trap
-from .process.sandbox import SandboxSettings
+from ...errors import InputError, SubmissionError
+from ...scenes.objects import KNOWN_CATEGORIES
+from ..process.isolation import Limits, PolicyError, PolicyProcess
+from ..process.isolation_check import Trap
+from ..process.sandbox import SandboxSettings
 from .protocol import (
     DEFAULT_MESSAGE_FLOATS,
     MODES,
@@ -307,7 +307,7 @@ class _Submission:
     in the first agent's process (every agent's process gets the same sandbox)."""
 
     def __init__(self, spec: PolicySpec, settings: CheckSettings, sandbox: SandboxSettings) -> None:
-        from .agents import DecentralizedTeam, ProcessEndpoint
+        from ..play.agents import DecentralizedTeam, ProcessEndpoint
 
         self._team: DecentralizedTeam | None = None
         if settings.mode == "central":
@@ -370,7 +370,7 @@ class _FailuresAsErrors:
 
     @staticmethod
     def _call(method: Any, argument: Any) -> Any:
-        from .episode_loop import EpisodeFailure
+        from ..play.episode_loop import EpisodeFailure
 
         try:
             return method(argument)

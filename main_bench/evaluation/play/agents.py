@@ -16,9 +16,9 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..policy.protocol import AgentInfo, EpisodeInfo
 from .channel import Channel, MessageError, check_message
 from .episode_loop import EpisodeFailure, episode_seed
-from .protocol import AgentInfo, EpisodeInfo
 
 
 class AgentEndpoint(Protocol):
@@ -44,7 +44,7 @@ class ProcessEndpoint:
     """A submitted `AgentPolicy` in its own `PolicyProcess`; `PolicyError`s become `EpisodeFailure`s."""
 
     def __init__(self, spec: Any, limits: Any, seed: int, sandbox: Any = None) -> None:
-        from .process.isolation import PolicyProcess
+        from ..process.isolation import PolicyProcess
 
         self.agent_id = ""
         self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent", wait=False)
@@ -68,14 +68,14 @@ class ProcessEndpoint:
             self.process.send_act((observation, inbox))
 
     def receive_act(self) -> tuple[int, Any]:
-        from .process.isolation import validate_agent_answer
+        from ..process.isolation import validate_agent_answer
 
         with _as_failure():
             return validate_agent_answer(self.process.receive(), self.agent_id)
 
     def drain(self) -> None:
         """Collect an unanswered request's reply (ignoring its errors) so the next request pairs up."""
-        from .process.isolation import PolicyError
+        from ..process.isolation import PolicyError
 
         if self.process.waiting:
             with contextlib.suppress(PolicyError):
@@ -87,7 +87,7 @@ class ProcessEndpoint:
 
 @contextlib.contextmanager
 def _as_failure():
-    from .process.isolation import PolicyError
+    from ..process.isolation import PolicyError
 
     try:
         yield

@@ -11,8 +11,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from .protocol import DEFAULT_MESSAGE_FLOATS, MODES, TRACKS
+from ...errors import InputError
+from ..policy.protocol import DEFAULT_MESSAGE_FLOATS, MODES, TRACKS
 
 #: Version of the rule that cuts a track into chunks (`chunks.make_chunks`): part of a run's identity, so a
 #: results directory made under another rule is never resumed with this one.

@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from ..episodes.schema import Episode
-from ..scenes.objects import KNOWN_CATEGORIES
-from ..sim.task import EpisodeJudge, TaskRules
-from .protocol import FOUND, EpisodeInfo, TargetInfo, agent_ids
-from .scoring.metrics import EpisodeTrace
+from ...episodes.schema import Episode
+from ...scenes.objects import KNOWN_CATEGORIES
+from ...sim.task import EpisodeJudge, TaskRules
+from ..policy.protocol import FOUND, EpisodeInfo, TargetInfo, agent_ids
+from ..scoring.metrics import EpisodeTrace
 
 
 class EpisodeFailure(Exception):

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .protocol import MESSAGE_VALUE_BYTES
+from ..policy.protocol import MESSAGE_VALUE_BYTES
 
 #: The longest message a policy process describes value by value; longer ones are reported by length only.
 DESCRIBE_LIMIT = 4096

@@ -12,7 +12,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from ..scenes.objects import KNOWN_CATEGORIES
+from ...scenes.objects import KNOWN_CATEGORIES
 
 FOUND, MOVE_FORWARD, TURN_LEFT, TURN_RIGHT = 0, 1, 2, 3
 ACTION_NAMES: tuple[str, ...] = ("found", "move_forward", "turn_left", "turn_right")
@@ -86,7 +86,7 @@ def observation_space(width: int, height: int, max_depth: float, track: str, goa
     from gymnasium import spaces
 
     if track not in TRACKS:
-        from ..errors import InputError
+        from ...errors import InputError
 
         raise InputError(f"unknown track {track!r}; use one of {', '.join(TRACKS)}")
     target = (

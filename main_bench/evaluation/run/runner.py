@@ -16,11 +16,12 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Protocol
 
-from .. import __version__
-from ..errors import DatasetError, ResultsError, SubmissionError
-from ..io import atomic_write_json, folder_lock, read_json
-from .baselines import privileged_baseline
-from .ledger import (
+from ... import __version__
+from ...errors import DatasetError, ResultsError, SubmissionError
+from ...io import atomic_write_json, folder_lock, read_json
+from ...task_rules import rules_json
+from ..baselines import privileged_baseline
+from ..output.ledger import (
     PART_KINDS,
     remove_unfinished_writes,
     seal_digest,
@@ -28,8 +29,7 @@ from .ledger import (
     verified_files,
     write_seal,
 )
-from .run.chunks import Chunk, make_chunks
-from .scoring.task_rules import rules_json
+from .chunks import Chunk, make_chunks
 from .settings import EvalSettings, SubmissionMeta
 
 RUN_FILE = "run.json"
@@ -83,7 +83,7 @@ def check_navmesh_algorithm(manifest: Any) -> None:
 
 def plan(settings: EvalSettings) -> tuple[Any, list[Chunk]]:
     """(manifest, chunks) of the evaluation; a split/task/agents selection with no episodes raises DatasetError."""
-    from ..episodes.dataset import episode_scenes, read_manifest
+    from ...episodes.dataset import episode_scenes, read_manifest
 
     manifest = read_manifest(settings.episodes)
     check_navmesh_algorithm(manifest)
@@ -177,15 +177,15 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
     """
     t0 = time.perf_counter()
     if privileged_baseline(settings.agent) is None:
-        from .process.sandbox import require_sandbox
-        from .submission import parse_spec
+        from ..policy.submission import parse_spec
+        from ..process.sandbox import require_sandbox
 
         parse_spec(settings.agent)  # a malformed spec fails now, before any file is written
         if settings.sandbox:
             require_sandbox()
     pool = None
     if settings.executor == "local" and settings.workers > 1:
-        from .run.executors import LocalWorkers
+        from .executors import LocalWorkers
 
         # they start up while this process plans; it works too
         pool = LocalWorkers(settings, settings.workers - 1, _progress_every(progress))
@@ -199,7 +199,7 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
 
 def _progress_every(progress: ProgressSink | None) -> float | None:
     """Seconds between the workers' live progress messages: none without a sink (`executors.PROGRESS_INTERVAL_S`)."""
-    from .run.executors import PROGRESS_INTERVAL_S
+    from .executors import PROGRESS_INTERVAL_S
 
     return None if progress is None else PROGRESS_INTERVAL_S
 
@@ -251,7 +251,7 @@ def _run(settings: EvalSettings, manifest: Any, chunks: list[Chunk], out: Path, 
                 progress.advance(value.episodes - episodes, value.agent_steps - steps)
 
     if pending:
-        from .run import executors
+        from . import executors
 
         if settings.executor == "ray":
             executors.run_ray(settings, pending, settings.workers, on_message)
@@ -266,8 +266,8 @@ def _run(settings: EvalSettings, manifest: Any, chunks: list[Chunk], out: Path, 
 def write_summary(settings: EvalSettings, manifest: Any, chunks: list[Chunk]) -> dict[str, Any]:
     """Compute `summary.json` from the records of `chunks` and write it atomically; returns it."""
     out = Path(settings.out)
-    from .results import _read
-    from .scoring.summary import build_summary
+    from ..output.results import _read
+    from ..scoring.summary import build_summary
 
     files = verified_files(out, chunks)
     write_seal(out, seal_document(sealed_identity(settings, manifest), chunks))

@@ -28,12 +28,12 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import ResultsError
-from ..io import atomic_write_json, check_schema_version, read_json, sha256_file
+from ...errors import ResultsError
+from ...io import atomic_write_json, check_schema_version, read_json, sha256_file
 from .records import partition_dir
 
 if TYPE_CHECKING:
-    from .run.chunks import Chunk
+    from ..run.chunks import Chunk
 
 #: 2: entries carry `run`, the SHA-256 of the run's seal `ledger/run.json`.
 LEDGER_SCHEMA_VERSION = 2

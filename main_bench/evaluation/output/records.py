@@ -15,7 +15,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..io import atomic_path
+from ...io import atomic_path
 
 #: Version of the records, trajectories and summary.json; readers refuse a newer one. 2: summary.json carries
 #: `files` (SHA-256 of every part) and settings.sandbox; 3: distances to success regions, intervals resampling

@@ -17,9 +17,9 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.dataset as pads
 
-from ..errors import ResultsError
-from ..io import check_schema_version, read_json
-from ..parquet_read import read_parquet
+from ...errors import ResultsError
+from ...io import check_schema_version, read_json
+from ...parquet_read import read_parquet
 from .ledger import verify_results
 from .records import RECORD_SCHEMA, RESULTS_SCHEMA_VERSION, TEAM, TRAJECTORY_SCHEMA
 
