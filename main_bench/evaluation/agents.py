@@ -207,7 +207,7 @@ class DecentralizedTeam:
 def _concurrently(calls: list[Callable[[], Any]]) -> list[Any]:
     """Run `calls` on threads (they wait on sockets and processes, not on Python); each call's result, or the
     exception it raised, in order. Never for starting processes: a child asks to die with the thread that
-    started it (`policy_child._die_with_parent`)."""
+    started it (`lifetime.die_with_parent`)."""
     if len(calls) <= 1:
         return [_result(c) for c in calls]
     from concurrent.futures import ThreadPoolExecutor

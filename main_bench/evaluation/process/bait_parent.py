@@ -19,9 +19,9 @@ def main(argv: list[str]) -> int:
     """Run the decoy (see the module docstring)."""
     sep = argv.index("--")
     options, command = argv[1:sep], argv[sep + 1:]
-    from .policy_child import _die_with_parent
+    from .lifetime import die_with_parent
 
-    _die_with_parent()
+    die_with_parent()
     here = os.getcwd()
     os.chdir(options[options.index("--out") + 1])
     fd = int(command[-1])

@@ -26,13 +26,17 @@ import sys
 import time
 import weakref
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from ...errors import InputError, MainBenchError, SubmissionError
 from ..submission import PolicySpec, ProtocolError
 from .ipc import encode_request, recv_reply, send_parts
 from .policy_child import EXIT_OUT_OF_MEMORY, TORCH_DEVICE_VAR
-from .sandbox import SandboxSettings, launch, popen, signal_of_exit
+from .policy_log import PolicyLog
+from .private_copy import PrivateCopy
+from .sandbox import SandboxSettings, launch, module_location, popen, signal_of_exit
+from .task_limit import TaskGroup
 
 #: The kinds a `PolicyError.reason` starts with.
 REASON_KINDS: tuple[str, ...] = ("exception", "timeout", "invalid_action", "invalid_message", "dead", "memory")
@@ -55,6 +59,10 @@ class Limits:
     threads: int = 1
     #: torch device for the policy ("cuda:0"), given to it as TORCH_DEVICE_VAR; None: the variable is left as is.
     torch_device: str | None = None
+    #: Processes and threads a sandbox may hold at once (its policy process's included).
+    processes: int = 64
+    #: CPU seconds each process of the policy may use over its life; past it the process is killed.
+    cpu_seconds: int = 3600
 
     def __post_init__(self) -> None:
         for name in ("step_seconds", "reset_seconds", "episode_seconds", "load_seconds"):
@@ -63,8 +71,13 @@ class Limits:
                 raise InputError(f"limit {name} must be a positive number of seconds, got {value!r}")
         if not (isinstance(self.memory_mb, int) and self.memory_mb >= 64):
             raise InputError(f"limit memory_mb must be an integer of at least 64 (MB), got {self.memory_mb!r}")
-        if not (isinstance(self.threads, int) and self.threads >= 1):
-            raise InputError(f"limit threads must be a positive integer, got {self.threads!r}")
+        for name in ("threads", "processes", "cpu_seconds"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+                raise InputError(f"limit {name} must be a positive integer, got {value!r}")
+        if self.processes < self.threads + 2:
+            raise InputError(f"limit processes ({self.processes}) must leave room for the policy's {self.threads} "
+                             "threads and its own two; raise it")
 
 
 class PolicyError(MainBenchError):
@@ -87,16 +100,21 @@ class PolicyProcess:
     The constructor starts the process and waits (up to `limits.load_seconds`) until the submission is loaded;
     a submission that fails to load raises `SubmissionError`. `reset` and `act` raise `PolicyError`. Every
     process runs in the sandbox `sandbox` describes (`sandbox.py`; by default on, refused with `SandboxError`
-    where none can be made).
+    where none can be made), on its own copy of the submission (`private_copy`), made once and kept for its
+    restarts. Its stdout and stderr go to `log` (appended, capped: `policy_log`), or with None to the
+    evaluator's stderr through the same cap.
     """
 
     def __init__(self, spec: PolicySpec, limits: Limits | None = None, seed: int = 0,
-                 sandbox: SandboxSettings | None = None, role: str = "team", wait: bool = True) -> None:
+                 sandbox: SandboxSettings | None = None, role: str = "team", wait: bool = True,
+                 log: Path | None = None) -> None:
         self.spec = spec
         self.role = role
         self.limits = limits or Limits()
         self.seed = int(seed)
         self.sandbox = sandbox or SandboxSettings()
+        self.log = log
+        self._copy: PrivateCopy | None = None
         self.policy_name = ""
         self.load_seconds = 0.0
         #: Seconds the last call spent inside the policy, as measured in its own process.
@@ -189,8 +207,10 @@ class PolicyProcess:
         self.ready()
 
     def close(self) -> None:
-        """Ask the process to exit (1 s), then kill it; idempotent."""
+        """Ask the process to exit (1 s), then kill it and remove its copy of the submission; idempotent."""
         if self._proc is None:
+            if self._copy is not None:
+                self._copy.remove()
             return
         if self.alive and self._sock is not None:
             with contextlib.suppress(OSError, EOFError, TimeoutError, ValueError, subprocess.TimeoutExpired):
@@ -199,6 +219,8 @@ class PolicyProcess:
                 recv_reply(self._sock, deadline)
                 self._proc.wait(timeout=max(0.0, deadline - time.monotonic()))
         self._kill()
+        if self._copy is not None:
+            self._copy.remove()
 
     def __enter__(self) -> PolicyProcess:
         return self
@@ -218,18 +240,36 @@ class PolicyProcess:
         if self.limits.torch_device is not None:
             extra_env[TORCH_DEVICE_VAR] = self.limits.torch_device
         command = [sys.executable, "-m", "main_bench.evaluation.process.policy_child", str(child.fileno())]
-        module = self.spec.target if self.spec.kind == "module" else None
+        sandboxed = self.sandbox.enabled
+        if sandboxed and self._copy is None:
+            module = module_location(self.spec.target) if self.spec.kind == "module" else None
+            self._copy = PrivateCopy(self.spec, module, self.sandbox.hidden)
+            weakref.finalize(self, self._copy.remove)
+        log = PolicyLog(self.log)
+        group = TaskGroup(self.limits.processes) if sandboxed else None
         try:
-            how = launch(command, self.spec.root, module, self.sandbox, self.limits.memory_mb, extra_env)
-            proc = popen(how, (child.fileno(),), _stdout_target())
+            how = launch(command, self._copy.folder if self._copy else None, self.sandbox, self.limits.memory_mb,
+                         extra_env)
+            proc = popen(how, (child.fileno(),), log.write_fd, log.write_fd,
+                         group.preexec if group is not None and group.active else None)
+        except BaseException:
+            log.close(0)
+            if group is not None:
+                group.remove()
+            raise
         finally:
             child.close()
+            log.child_started()
+            if group is not None:
+                group.started()
         self._proc, self._sock = proc, parent
-        self._finalizer = weakref.finalize(self, _kill_process, proc, parent)
+        self._finalizer = weakref.finalize(self, _kill_process, proc, parent, log, group)
         self._episode_used = 0.0
-        boot = {"spec": (self.spec.kind, self.spec.target, self.spec.attr, self.spec.root), "seed": self.seed,
-                "role": self.role,
-                "memory_mb": self.limits.memory_mb, "threads": self.limits.threads, "sys_path": list(sys.path)}
+        spec = self._copy.inside if self._copy else self.spec
+        boot = {"spec": (spec.kind, spec.target, spec.attr, spec.root), "seed": self.seed, "role": self.role,
+                "memory_mb": self.limits.memory_mb, "threads": self.limits.threads,
+                "processes": self.limits.processes if sandboxed else None, "cpu_seconds": self.limits.cpu_seconds,
+                "sys_path": [*(self._copy.sys_path if self._copy else ()), *sys.path]}
         started = time.monotonic()
         self._post(boot, started + self.limits.load_seconds, "loading")
         self._loading = started
@@ -336,7 +376,8 @@ class PolicyProcess:
                 name = signal.Signals(-code).name
             except ValueError:
                 name = str(-code)
-            hint = " (out of memory?)" if -code == signal.SIGKILL else ""
+            hint = {signal.SIGKILL: " (out of memory?)",
+                    signal.SIGXCPU: f" (CPU time limit {self.limits.cpu_seconds} s)"}.get(-code, "")
             return f"dead: killed by signal {name}{hint}"
         return f"dead: exit code {code}"
 
@@ -402,15 +443,7 @@ def _shown(value: Any) -> str:
     return f"{value!r} ({type(value).__name__})"
 
 
-def _stdout_target() -> int | None:
-    """The policy's stdout goes to our stderr, keeping our stdout (JSON output) clean."""
-    try:
-        return sys.stderr.fileno()
-    except (AttributeError, OSError, ValueError):
-        return subprocess.DEVNULL
-
-
-def _kill_process(proc: subprocess.Popen, sock: socket.socket) -> None:
+def _kill_process(proc: subprocess.Popen, sock: socket.socket, log: PolicyLog, group: TaskGroup | None) -> None:
     with contextlib.suppress(OSError):
         sock.close()
     with contextlib.suppress(ProcessLookupError, PermissionError):
@@ -420,3 +453,6 @@ def _kill_process(proc: subprocess.Popen, sock: socket.socket) -> None:
             proc.kill()
     with contextlib.suppress(subprocess.TimeoutExpired):
         proc.wait(timeout=5.0)
+    log.close()
+    if group is not None:
+        group.remove()
