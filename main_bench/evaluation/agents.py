@@ -43,11 +43,11 @@ class AgentEndpoint(Protocol):
 class ProcessEndpoint:
     """A submitted `AgentPolicy` in its own `PolicyProcess`; `PolicyError`s become `EpisodeFailure`s."""
 
-    def __init__(self, spec: Any, limits: Any, seed: int, sandbox: Any = None) -> None:
+    def __init__(self, spec: Any, limits: Any, seed: int, sandbox: Any = None, log: Any = None) -> None:
         from .process.isolation import PolicyProcess
 
         self.agent_id = ""
-        self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent", wait=False)
+        self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent", wait=False, log=log)
 
     def ready(self) -> None:
         """Wait until the submission is loaded (processes of a team load in parallel); raises
