@@ -268,7 +268,8 @@ def _play(process: _Submission, spec: PolicySpec, settings: CheckSettings, info:
         results["isolation"] = _isolation(verdict, settings.sandbox, "" if reply is not None else
                                           "the escape probe did not answer",
                                           "" if not alive else "process "
-                                          f"{', '.join(map(str, alive))} still running after close")
+                                          f"{', '.join(map(str, alive))} still running after close",
+                                          process.refused())
     return actions
 
 
@@ -310,6 +311,16 @@ class _Submission:
 
     def probe(self, request: dict[str, Any]) -> dict[str, Any]:
         return self._procs[0].probe(request)
+
+    def refused(self) -> str:
+        """What the processes tried that the sandbox's seccomp filter refused (empty when nothing)."""
+        counts = [(f"agent_{i}" if len(self._procs) > 1 else "the policy", p.refused_calls)
+                  for i, p in enumerate(self._procs) if p.refused_calls]
+        if not counts:
+            return ""
+        who = ", ".join(f"{name} {n}" for name, n in counts)
+        return (f"its processes made system calls the sandbox refuses ({who}): file locks, inotify, fanotify or kernel keyrings, "
+                "through which processes sharing read-only files could pass bits outside the channel")
 
     def _driver(self) -> Any:
         return self._procs[0] if self._team is None else _FailuresAsErrors(self._team)

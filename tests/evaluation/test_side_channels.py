@@ -5,6 +5,7 @@ receiver reports is the same whatever was sent, over two episodes of random bits
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,7 @@ from main_bench.evaluation.process.sandbox import SandboxSettings, sandbox_probl
 from main_bench.evaluation.submission import parse_spec
 
 WHISPER = Path(__file__).parent / "policies" / "whisper.py"
+TALKER = Path(__file__).parent / "policies" / "talker.py"
 WAYS = ["RecordLock", "TmpFile", "ShmFile", "Signal", "AbstractSocket", "Inotify"]
 
 
@@ -65,3 +67,17 @@ def test_no_way_past_the_channel_works_in_the_sandbox(way):
     sent, heard = whisper(way, SandboxSettings())
     assert 0 < sum(sent) < len(sent)
     assert len(set(heard)) == 1, (sent, heard)  # the same report whatever was sent: no bit crossed
+
+
+@pytest.mark.parametrize("way", ["RecordLock", "Inotify"])
+def test_check_agent_silent_fails_a_policy_that_tries(cli, way):
+    res = cli("evaluate", "check-agent", f"{WHISPER}:{way}", "--mode", "silent", "--steps", "4", "--json")
+    assert res.code == 1, res.err
+    isolation = {c["name"]: c for c in json.loads(res.out)["checks"]}["isolation"]
+    assert isolation["status"] == "fail" and "system calls the sandbox refuses" in isolation["message"], isolation
+
+
+def test_check_agent_silent_passes_an_honest_agent(cli):
+    res = cli("evaluate", "check-agent", f"{TALKER}:Silent", "--mode", "silent", "--steps", "4", "--json")
+    isolation = {c["name"]: c for c in json.loads(res.out)["checks"]}["isolation"]
+    assert isolation["status"] == "pass", isolation

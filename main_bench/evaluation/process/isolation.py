@@ -119,6 +119,8 @@ class PolicyProcess:
         self.load_seconds = 0.0
         #: Seconds the last call spent inside the policy, as measured in its own process.
         self.last_policy_seconds = 0.0
+        #: System calls the sandbox refused, as the process reported them (with `SandboxSettings.report_refused`).
+        self.refused_calls = 0
         self._proc: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
         self._finalizer: weakref.finalize | None = None
@@ -269,7 +271,8 @@ class PolicyProcess:
         boot = {"spec": (spec.kind, spec.target, spec.attr, spec.root), "seed": self.seed, "role": self.role,
                 "memory_mb": self.limits.memory_mb, "threads": self.limits.threads,
                 "processes": self.limits.processes if sandboxed else None, "cpu_seconds": self.limits.cpu_seconds,
-                "sys_path": [*(self._copy.sys_path if self._copy else ()), *sys.path]}
+                "sys_path": [*(self._copy.sys_path if self._copy else ()), *sys.path],
+                "report_refused": self.sandbox.report_refused}
         started = time.monotonic()
         self._post(boot, started + self.limits.load_seconds, "loading")
         self._loading = started
@@ -341,6 +344,9 @@ class PolicyProcess:
             self._kill()
             raise PolicyError(f"invalid_action: unreadable reply field seconds={seconds!r}")
         self.last_policy_seconds = float(seconds)
+        refused = reply.get("refused", 0)
+        if isinstance(refused, int) and not isinstance(refused, bool):
+            self.refused_calls = max(self.refused_calls, refused)
         if reply.get("status") == "error":
             raise self._policy_exception(reply, op)
         if reply.get("status") != "ok":

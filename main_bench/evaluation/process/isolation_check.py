@@ -148,7 +148,7 @@ class Trap:
                    "--seed", "0", "--")
         binds = (*base.binds, Bind(str(self.episodes)), Bind(str(self.results), writable=True))
         return SandboxSettings(enabled=base.enabled, hidden=base.hidden, binds=binds if base.enabled else (),
-                               wrapper=wrapper)
+                               wrapper=wrapper, report_refused=True)
 
     def request(self, root: Path | None) -> dict[str, Any]:
         """The escape probe (`escape_probe.try_escapes`) for a policy whose folder is `root`."""

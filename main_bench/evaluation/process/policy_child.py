@@ -52,10 +52,22 @@ def main(argv: list[str]) -> int:
     die_with_parent()
     _limit_memory(boot["memory_mb"])
     _limit_processes(boot.get("processes"), boot.get("cpu_seconds"))
+    refused = _count_refused() if boot.get("report_refused") else None
     policy = _load(sock, boot)
     if policy is None:
         return 0
-    return _serve(sock, policy, boot.get("role", "team"))
+    return _serve(sock, policy, boot.get("role", "team"), refused)
+
+
+def _count_refused() -> list[int]:
+    """Count the SIGSYS signals of system calls the sandbox's seccomp filter refuses (`check-agent` only)."""
+    count = [0]
+
+    def refused(*_: object) -> None:
+        count[0] += 1
+
+    signal.signal(signal.SIGSYS, refused)
+    return count
 
 
 def _limit_memory(memory_mb: int) -> None:
@@ -106,7 +118,7 @@ def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
     return policy
 
 
-def _serve(sock: socket.socket, policy: Any, role: str) -> int:
+def _serve(sock: socket.socket, policy: Any, role: str, refused: list[int] | None) -> int:
     from ..submission import seed_everything
 
     while True:
@@ -138,6 +150,8 @@ def _serve(sock: socket.socket, policy: Any, role: str) -> int:
             reply = {"status": "error", **_describe(exc)}
         reply["seq"] = seq
         reply["seconds"] = time.perf_counter() - start
+        if refused:
+            reply["refused"] = refused[0]
         _reply(sock, reply)
 
 

@@ -75,13 +75,15 @@ class SandboxSettings:
     """How policy processes are confined. `enabled` False runs them as plain child processes (`--no-sandbox`).
 
     `hidden`: paths the policy must never see even where they lie inside a folder the sandbox shows.
-    `binds` and `wrapper` serve `check-agent`'s bait: extra folders, and a command run between the sandbox and
-    the policy process (the policy process's parent)."""
+    `binds`, `wrapper` and `report_refused` serve `check-agent`: extra folders (the bait), a command run between
+    the sandbox and the policy process (the policy process's parent), and system calls the seccomp filter
+    refuses raising SIGSYS, which the policy process counts and reports."""
 
     enabled: bool = True
     hidden: tuple[str, ...] = ()
     binds: tuple[Bind, ...] = ()
     wrapper: tuple[str, ...] = ()
+    report_refused: bool = False
 
 
 @dataclass(frozen=True)
@@ -161,7 +163,7 @@ def launch(command: list[str], submission: Path | None, settings: SandboxSetting
     options = sandbox_options(submission, settings, memory_mb)
     for name, value in {**SANDBOX_ENV, **extra_env}.items():
         options += ["--setenv", name, value]
-    return Launch((*_bwrap_argv(exe), *argv), dict(SANDBOX_ENV), "/", _pipes(options))
+    return Launch((*_bwrap_argv(exe), *argv), dict(SANDBOX_ENV), "/", _pipes(options, settings.report_refused))
 
 
 def popen(how: Launch, pass_fds: tuple[int, ...], stdout: int | None, stderr: int | None = None,
@@ -284,9 +286,9 @@ def _bwrap_argv(exe: str) -> tuple[str, ...]:
         exe, "--args", "{args_fd}")
 
 
-def _pipes(options: list[str]) -> tuple[tuple[str, bytes], ...]:
+def _pipes(options: list[str], trap: bool = False) -> tuple[tuple[str, bytes], ...]:
     args = b"".join(o.encode() + b"\0" for o in options)
-    seccomp = seccomp_program()
+    seccomp = seccomp_program(trap=trap)
     return (("{args_fd}", args),) + ((("{seccomp_fd}", seccomp),) if seccomp else ())
 
 

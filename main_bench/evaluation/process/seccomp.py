@@ -11,8 +11,10 @@ of them without writing a byte. The filter makes these calls fail with EPERM:
 - `add_key`, `request_key`, `keyctl`;
 
 and kills the process on any system call of another ABI (x32 or 32-bit calls on x86-64), which would bypass
-the numbers checked. Everything else is allowed. `program()` is the classic BPF program bubblewrap installs
-with `--seccomp FD` (as bytes: 8-byte `sock_filter` entries); None on an architecture this module does not know.
+the numbers checked. Everything else is allowed. With `trap` (`check-agent`) a refused call raises SIGSYS
+instead, which the policy process counts and reports (it fails with ENOSYS). `program()` is the classic BPF
+program bubblewrap installs with `--seccomp FD` (as bytes: 8-byte `sock_filter` entries); None on an
+architecture this module does not know.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ _LD_W_ABS, _JEQ_K, _JGE_K, _RET_K = 0x20, 0x15, 0x35, 0x06
 _RET_ALLOW = 0x7FFF0000
 _RET_KILL_PROCESS = 0x80000000
 _RET_ERRNO = 0x00050000
+_RET_TRAP = 0x00030000
 # offsets in struct seccomp_data: nr, arch, instruction pointer, args[6] (little-endian: low word first)
 _NR, _ARCH, _ARG1_LOW = 0, 4, 24
 
@@ -46,13 +49,14 @@ def _op(code: int, k: int, jt: int = 0, jf: int = 0) -> bytes:
     return struct.pack("=HBBI", code, jt, jf, k)
 
 
-def program(machine: str | None = None) -> bytes | None:
-    """The filter as bubblewrap reads it, for `machine` (default: this one); None when it is unknown."""
+def program(machine: str | None = None, trap: bool = False) -> bytes | None:
+    """The filter as bubblewrap reads it, for `machine` (default: this one); None when it is unknown. `trap`:
+    refused calls raise SIGSYS rather than fail quietly with EPERM."""
     arch = _ARCHES.get(machine or platform.machine())
     if arch is None:
         return None
     audit_arch, numbers = arch
-    deny = _RET_ERRNO | errno.EPERM
+    deny = _RET_TRAP if trap else _RET_ERRNO | errno.EPERM
     blocked = [numbers[name] for name in BLOCKED_CALLS if name in numbers]
     code = [_op(_LD_W_ABS, _ARCH), _op(_JEQ_K, audit_arch, 1, 0), _op(_RET_K, _RET_KILL_PROCESS),
             _op(_LD_W_ABS, _NR)]
