@@ -211,8 +211,7 @@ class PolicyProcess:
     def close(self) -> None:
         """Ask the process to exit (1 s), then kill it and remove its copy of the submission; idempotent."""
         if self._proc is None:
-            if self._copy is not None:
-                self._copy.remove()
+            self._remove_copy()
             return
         if self.alive and self._sock is not None:
             with contextlib.suppress(OSError, EOFError, TimeoutError, ValueError, subprocess.TimeoutExpired):
@@ -221,8 +220,13 @@ class PolicyProcess:
                 recv_reply(self._sock, deadline)
                 self._proc.wait(timeout=max(0.0, deadline - time.monotonic()))
         self._kill()
+        self._remove_copy()
+
+    def _remove_copy(self) -> None:
+        """Delete the submission's copy; a later start makes a fresh one."""
         if self._copy is not None:
             self._copy.remove()
+            self._copy = None
 
     def __enter__(self) -> PolicyProcess:
         return self
