@@ -15,7 +15,12 @@ from mb_testing import need
 from main_bench.evaluation.check import CheckSettings, synthetic_episode_info, synthetic_observations
 from main_bench.evaluation.process.isolation import Limits, PolicyError, PolicyProcess
 from main_bench.evaluation.process.policy_log import LOG_CAP_BYTES, truncation_note
-from main_bench.evaluation.process.sandbox import SandboxSettings, sandbox_problem
+from main_bench.evaluation.process.sandbox import (
+    SIZE_OPTION_SINCE,
+    SandboxSettings,
+    bwrap_version,
+    sandbox_problem,
+)
 from main_bench.evaluation.submission import parse_spec
 
 HOG = Path(__file__).parent / "policies" / "hog.py"
@@ -40,6 +45,7 @@ def _play(way: str, limits: Limits, log: Path | None = None) -> str:
 
 @pytest.mark.parametrize("way", ["ShmHog", "TmpHog"])
 def test_memory_limit_holds_against_files_in_memory(way):
+    need(bwrap_version() >= SIZE_OPTION_SINCE, f"sized tmpfs need bubblewrap 0.8 or later, not {bwrap_version()}")
     reason = _play(way, Limits(memory_mb=512))
     written = int(re.search(r"wrote (\d+) MB", reason).group(1))
     assert 200 <= written <= 256, reason  # the tmpfs holds half the 512 MB, whatever the policy writes
@@ -66,3 +72,16 @@ def test_300_mb_printed_leave_the_cap_in_the_log_and_nothing_on_the_evaluator_s_
         truncation_note(LOG_CAP_BYTES))
     assert set(data[:LOG_CAP_BYTES]) == {ord("y")}
     assert "yyyy" not in capfd.readouterr().err
+
+
+def test_the_seccomp_filter_checks_the_architecture_first_and_ends_allowing():
+    from main_bench.evaluation.process.seccomp import program
+
+    assert program("sparc") is None
+    for machine in ("x86_64", "aarch64"):
+        code = program(machine)
+        assert code is not None and len(code) % 8 == 0
+        first = code[:8]
+        assert first[:2] == b"\x20\x00" and int.from_bytes(first[4:], "little") == 4  # load seccomp_data.arch
+        assert int.from_bytes(code[-4:], "little") == 0x7FFF0000  # the last instruction: allow
+    assert program("x86_64") != program("x86_64", trap=True)
