@@ -63,6 +63,19 @@ def test_a_spinning_policy_is_killed_at_its_cpu_limit():
     assert reason == "dead: killed by signal SIGXCPU (CPU time limit 1 s)", reason
 
 
+def test_a_process_that_used_half_its_cpu_limit_is_replaced_between_episodes_not_killed_in_one():
+    settings = CheckSettings()
+    info = synthetic_episode_info(settings)
+    obs = synthetic_observations(settings, info, info.agent_ids, np.random.default_rng(0))
+    pids = []
+    with PolicyProcess(parse_spec(f"{HOG}:Steady"), Limits(cpu_seconds=2), 0, SandboxSettings()) as proc:
+        for _ in range(4):  # 2.4 s of CPU in all: one process alone would be killed (SIGXCPU) in the fourth
+            proc.reset(info)
+            pids.append(proc.pid)
+            assert set(proc.act(obs)) == set(info.agent_ids)
+    assert len(set(pids)) >= 2, pids  # replaced at a reset, never killed in an episode
+
+
 def test_300_mb_printed_leave_the_cap_in_the_log_and_nothing_on_the_evaluator_s_stderr(tmp_path, capfd):
     log = tmp_path / "logs" / "team.log"
     reason = _play("Loud", Limits(step_seconds=60), log)

@@ -18,6 +18,7 @@ A submission that cannot be loaded at all raises `SubmissionError` (bad input, C
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import signal
 import socket
@@ -61,7 +62,9 @@ class Limits:
     torch_device: str | None = None
     #: Processes and threads a sandbox may hold at once (its policy process's included).
     processes: int = 64
-    #: CPU seconds each process of the policy may use over its life; past it the process is killed.
+    #: CPU seconds each process of the policy may use over its life; past it the process is killed. A policy
+    #: process that has used half of it is replaced by a fresh one before its next episode, so this bounds the
+    #: CPU of one episode, not of a run.
     cpu_seconds: int = 3600
 
     def __post_init__(self) -> None:
@@ -121,6 +124,8 @@ class PolicyProcess:
         self.last_policy_seconds = 0.0
         #: System calls the sandbox refused, as the process reported them (with `SandboxSettings.report_refused`).
         self.refused_calls = 0
+        #: CPU seconds the current process has used, as it reported them.
+        self.cpu_used = 0.0
         self._proc: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
         self._finalizer: weakref.finalize | None = None
@@ -157,8 +162,9 @@ class PolicyProcess:
 
     def send_reset(self, info: Any) -> None:
         """The first half of `reset`: send the request; `receive()` waits for the answer. Lets an evaluator
-        start several processes' resets before waiting for any."""
-        if not self.alive:
+        start several processes' resets before waiting for any. A process that has used half its CPU-time limit
+        is replaced first (policies keep no state across episodes, so results do not change)."""
+        if not self.alive or self.cpu_used >= self.limits.cpu_seconds / 2:
             self.restart()
         self._episode_used = 0.0
         budget = min(self.limits.reset_seconds, self.limits.episode_seconds)
@@ -269,6 +275,7 @@ class PolicyProcess:
             if group is not None:
                 group.started()
         self._proc, self._sock = proc, parent
+        self.cpu_used = 0.0
         self._finalizer = weakref.finalize(self, _kill_process, proc, parent, log, group)
         self._episode_used = 0.0
         spec = self._copy.inside if self._copy else self.spec
@@ -348,6 +355,9 @@ class PolicyProcess:
             self._kill()
             raise PolicyError(f"invalid_action: unreadable reply field seconds={seconds!r}")
         self.last_policy_seconds = float(seconds)
+        cpu = reply.get("cpu_seconds", 0.0)
+        if isinstance(cpu, int | float) and not isinstance(cpu, bool) and math.isfinite(cpu):
+            self.cpu_used = float(cpu)
         refused = reply.get("refused", 0)
         if isinstance(refused, int) and not isinstance(refused, bool):
             self.refused_calls = max(self.refused_calls, refused)

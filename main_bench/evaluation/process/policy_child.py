@@ -88,7 +88,9 @@ def _cap(which: int, limit: int, hard_extra: int = 0) -> None:
 
 def _limit_processes(processes: int | None, cpu_seconds: int | None) -> None:
     """Soft and hard limits alike on the processes and threads of this sandbox's user (its own user namespace)
-    and on each process's CPU seconds (SIGXCPU at the limit, SIGKILL a second later)."""
+    and on each process's CPU seconds (SIGXCPU at the limit, SIGKILL a second later). Every reply says how many
+    CPU seconds this process has used, so the evaluator replaces it between episodes before it nears the
+    limit."""
     if processes:
         _cap(resource.RLIMIT_NPROC, int(processes))
     if cpu_seconds:
@@ -150,6 +152,8 @@ def _serve(sock: socket.socket, policy: Any, role: str, refused: list[int] | Non
             reply = {"status": "error", **_describe(exc)}
         reply["seq"] = seq
         reply["seconds"] = time.perf_counter() - start
+        used = resource.getrusage(resource.RUSAGE_SELF)
+        reply["cpu_seconds"] = used.ru_utime + used.ru_stime
         if refused:
             reply["refused"] = refused[0]
         _reply(sock, reply)

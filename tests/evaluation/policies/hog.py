@@ -5,7 +5,9 @@ raises (`exception: RuntimeError: <what> <how much>`):
 - `ForkBomb`: start 1,000 processes that sleep (`forked N`);
 - `Spinner`: spin on the CPU for 20 s of wall clock (`spun N s`);
 - `Loud`: print 300 MB to stdout and stderr, then reopen /proc/self/fd/2 to read and truncate what it wrote
-  (`printed N MB; reopened: ...`).
+  (`printed N MB; reopened: ...`);
+
+and `Steady`, which plays valid moves at 0.6 s of CPU a step.
 """
 
 from __future__ import annotations
@@ -92,3 +94,13 @@ class Loud(_Hog):
         except OSError as exc:
             reopened = type(exc).__name__
         return f"printed {printed} MB; reopened: {reopened}"
+
+
+class Steady(_Hog):
+    """An honest but busy policy: 0.6 s of CPU a step, valid moves."""
+
+    def act(self, observations: dict) -> dict[str, int]:
+        until = time.process_time() + 0.6
+        while time.process_time() < until:
+            pass
+        return {agent: 1 for agent in sorted(observations)}
