@@ -10,6 +10,7 @@ import secrets
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -122,8 +123,11 @@ def test_sigkill_of_evaluate_leaves_no_process_and_resuming_gives_the_same_recor
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
     assert not (out / "summary.json").exists()
+    orphans = list(Path(tempfile.gettempdir()).glob(f"main-bench-policy-{proc.pid}-*"))
+    assert orphans  # the killed run's copies of the submission, removed by the next run that makes one
     resumed = subprocess.run(_command(tiny_dataset, out, 2), capture_output=True, text=True, timeout=600)
     assert resumed.returncode == 0, resumed.stderr
+    assert not any(path.exists() for path in orphans)
     fresh = subprocess.run(_command(tiny_dataset, tmp_path / "fresh", 1), capture_output=True, text=True,
                            timeout=600)
     assert fresh.returncode == 0, fresh.stderr

@@ -9,11 +9,14 @@ shared `policy.py` would otherwise carry bits between them. What is copied is wh
 - a module spec whose top-level package or module lies outside the Python installation: that package or file
   (`/submission` comes first on the policy's `sys.path`); one inside the installation is shown with it.
 
-`PrivateCopy.inside` is the spec as the policy process loads it (paths under `/submission`).
+`PrivateCopy.inside` is the spec as the policy process loads it (paths under `/submission`). Copies live in the
+system's temporary folder as `main-bench-policy-<evaluator pid>-*`; making one removes those of evaluator
+processes that no longer exist (a killed run's).
 """
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import tempfile
@@ -23,6 +26,7 @@ from ..submission import PolicySpec
 
 #: Where the sandbox shows the submission's copy.
 SUBMISSION_MOUNT = Path("/submission")
+COPY_PREFIX = "main-bench-policy-"
 
 
 def installation_dirs() -> tuple[Path, ...]:
@@ -39,7 +43,8 @@ class PrivateCopy:
     `sys.path`."""
 
     def __init__(self, spec: PolicySpec, module_file: Path | None, hidden: tuple[str, ...] = ()) -> None:
-        self._temp = Path(tempfile.mkdtemp(prefix="main-bench-policy-"))
+        remove_orphan_copies()
+        self._temp = Path(tempfile.mkdtemp(prefix=f"{COPY_PREFIX}{os.getpid()}-"))
         self.folder: Path | None = self._temp / "submission"
         self.sys_path: tuple[str, ...] = ()
         skip = {Path(h).resolve() for h in hidden}
@@ -71,6 +76,28 @@ class PrivateCopy:
     def remove(self) -> None:
         """Delete the copy (idempotent)."""
         shutil.rmtree(self._temp, ignore_errors=True)
+
+
+def remove_orphan_copies(folder: Path | None = None) -> list[Path]:
+    """Delete the copies in `folder` (default: the system's temporary folder) made by processes that no longer
+    exist; returns them."""
+    removed = []
+    for path in (folder or Path(tempfile.gettempdir())).glob(f"{COPY_PREFIX}*-*"):
+        owner = path.name[len(COPY_PREFIX):].split("-", 1)[0]
+        if owner.isdigit() and not _alive(int(owner)):
+            shutil.rmtree(path, ignore_errors=True)
+            removed.append(path)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _copy_tree(source: Path, target: Path, skip: set[Path]) -> None:
