@@ -58,6 +58,18 @@ def test_a_thousand_forks_fail():
     assert 0 < forked <= limits.processes, reason
 
 
+def test_where_a_memory_cgroup_can_be_made_the_limit_holds_for_the_sandbox_as_a_whole():
+    from main_bench.evaluation.process.task_limit import TaskGroup
+
+    probe = TaskGroup(64, 512 << 20)
+    probe.remove()
+    need(any(k.startswith("memory.") for k in probe.limits), "no memory cgroup can be made here (needs root or a "
+         "delegated cgroup v2 subtree): the memory limit holds per process only")
+    reason = _play("ForkHog", Limits(memory_mb=512))
+    # 8 x 120 MB at once: each process is within its own 512 MB, the sandbox is not
+    assert reason.startswith("dead: killed by signal SIGKILL") or re.search(r"killed [1-8] of 8", reason), reason
+
+
 def test_a_spinning_policy_is_killed_at_its_cpu_limit():
     reason = _play("Spinner", Limits(cpu_seconds=1, step_seconds=15))
     assert reason == "dead: killed by signal SIGXCPU (CPU time limit 1 s)", reason

@@ -258,7 +258,7 @@ class PolicyProcess:
             self._copy = PrivateCopy(self.spec, module, self.sandbox.hidden)
             weakref.finalize(self, self._copy.remove)
         log = PolicyLog(self.log)
-        group = TaskGroup(self.limits.processes) if sandboxed else None
+        group = TaskGroup(self.limits.processes, self.limits.memory_mb << 20) if sandboxed else None
         try:
             how = launch(command, self._copy.folder if self._copy else None, self.sandbox, self.limits.memory_mb,
                          extra_env)

@@ -31,3 +31,20 @@ def die_with_parent(parent: int | None = None) -> bool:
     if parent is not None and os.getppid() != parent:
         os._exit(1)  # the parent died before the request: nobody is left to wait for this process
     return True
+
+
+def process_alive(pid: int) -> bool:
+    """Whether a process `pid` exists (one of another user's counts)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def owner_gone(name: str, prefix: str) -> bool:
+    """Whether `name`, `<prefix><pid>-...`, names a process that no longer exists (what a killed run left)."""
+    owner = name[len(prefix):].split("-", 1)[0] if name.startswith(prefix) else ""
+    return owner.isdigit() and not process_alive(int(owner))

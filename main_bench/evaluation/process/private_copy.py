@@ -23,6 +23,7 @@ import tempfile
 from pathlib import Path
 
 from ..submission import PolicySpec
+from .lifetime import owner_gone
 
 #: Where the sandbox shows the submission's copy.
 SUBMISSION_MOUNT = Path("/submission")
@@ -83,21 +84,10 @@ def remove_orphan_copies(folder: Path | None = None) -> list[Path]:
     exist; returns them."""
     removed = []
     for path in (folder or Path(tempfile.gettempdir())).glob(f"{COPY_PREFIX}*-*"):
-        owner = path.name[len(COPY_PREFIX):].split("-", 1)[0]
-        if owner.isdigit() and not _alive(int(owner)):
+        if owner_gone(path.name, COPY_PREFIX):
             shutil.rmtree(path, ignore_errors=True)
             removed.append(path)
     return removed
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def _copy_tree(source: Path, target: Path, skip: set[Path]) -> None:

@@ -3,6 +3,7 @@ raises (`exception: RuntimeError: <what> <how much>`):
 
 - `ShmHog`, `TmpHog`: write 1.2 GB into /dev/shm or /tmp, 1 MB at a time (`wrote N MB`);
 - `ForkBomb`: start 1,000 processes that sleep (`forked N`);
+- `ForkHog`: eight processes holding 120 MB each at once (`killed N of 8`);
 - `Spinner`: spin on the CPU for 20 s of wall clock (`spun N s`);
 - `Loud`: print 300 MB to stdout and stderr, then reopen /proc/self/fd/2 to read and truncate what it wrote
   (`printed N MB; reopened: ...`);
@@ -104,3 +105,20 @@ class Steady(_Hog):
         while time.process_time() < until:
             pass
         return {agent: 1 for agent in sorted(observations)}
+
+
+class ForkHog(_Hog):
+    """Eight processes holding 120 MB each at once (960 MB): within every process's own address-space limit."""
+
+    def take(self) -> str:
+        children = []
+        for _ in range(8):
+            pid = os.fork()
+            if pid == 0:
+                block = bytearray(120 << 20)
+                block[::4096] = b"z" * len(block[::4096])
+                time.sleep(2)
+                os._exit(0)
+            children.append(pid)
+        killed = sum(os.waitpid(pid, 0)[1] & 0x7F == 9 for pid in children)
+        return f"killed {killed} of 8"
