@@ -19,6 +19,7 @@ from ..errors import InputError, SubmissionError
 from ..scenes.objects import KNOWN_CATEGORIES
 from .process.isolation import Limits, PolicyError, PolicyProcess
 from .process.isolation_check import Trap
+from .process.lifetime import process_alive
 from .process.sandbox import SandboxSettings
 from .protocol import (
     DEFAULT_MESSAGE_FLOATS,
@@ -263,7 +264,7 @@ def _play(process: _Submission, spec: PolicySpec, settings: CheckSettings, info:
             reply = process.probe(trap.request(spec.root))
     process.close()
     if trap is not None:
-        alive = [p for p in pids if p is None or p == os.getpid() or _pid_alive(p)]
+        alive = [p for p in pids if p is None or p == os.getpid() or process_alive(p)]
         verdict = trap.verdict(reply, spec.root)
         results["isolation"] = _isolation(verdict, settings.sandbox, "" if reply is not None else
                                           "the escape probe did not answer",
@@ -394,13 +395,3 @@ def _compare(first: list[dict[str, int]], second: list[dict[str, int]] | None) -
 def _histogram(actions: list[dict[str, int]]) -> str:
     counts = np.bincount([a for step in actions for a in step.values()], minlength=4)
     return ", ".join(f"{name} {n}" for name, n in zip(("found", "forward", "left", "right"), counts, strict=True))
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
