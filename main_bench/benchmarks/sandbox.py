@@ -57,7 +57,7 @@ def _one(spec: Any, sandboxed: bool, steps: int) -> dict[str, Any]:
 
 def run(quick: bool = False) -> dict[str, Any]:
     """Medians of policy start (s) and step round trip (ms), sandboxed and bare, and their ratios."""
-    from ..evaluation import sandbox
+    from ..evaluation.process import sandbox
     from ..evaluation.submission import parse_spec
 
     machine = machine_info()
