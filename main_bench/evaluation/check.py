@@ -365,8 +365,10 @@ def _isolation(verdict: Any, sandbox: SandboxSettings, *problems: str, skip: boo
     """The isolation check's result from the trap's verdict and any other problem found; with `skip` (the
     policy did not get as far as the probe) a skip unless it already went for the bait."""
     failures = [p for p in problems if p]
-    if verdict.attempts:
-        shown = "; ".join(verdict.attempts[:3]) + ("; ..." if len(verdict.attempts) > 3 else "")
+    bait = [a for a in verdict.attempts if not a.startswith("signalled")]
+    failures += [f"the policy {a}" for a in verdict.attempts if a.startswith("signalled")]
+    if bait:
+        shown = "; ".join(bait[:3]) + ("; ..." if len(bait) > 3 else "")
         failures.append(f"the policy went for the bait data set/results its parent's command line names: {shown}")
     if verdict.escapes:
         where = "in the sandbox" if sandbox.enabled else "without a sandbox (--no-sandbox)"
