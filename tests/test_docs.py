@@ -76,9 +76,14 @@ _PLACEHOLDER_FOLDERS = ("dir/", "path/")
 _TEST_NAME = re.compile(r"\btest_\w+")
 
 
+#: Where a named path may start: the repository, the package and the tests, and their folders (a page's section
+#: says which stage, so `render/gl.py` under `sim/`, `policies/hog.py` under the evaluation tests).
+_ROOTS = (REPO, REPO / "main_bench", REPO / "tests",
+          *sorted(p for p in (*(REPO / "main_bench").iterdir(), *(REPO / "tests").iterdir()) if p.is_dir()))
+
+
 def _file_exists(named: str) -> bool:
-    return named.startswith(_PLACEHOLDER_FOLDERS) or any((root / named).exists()
-                                                         for root in (REPO, REPO / "main_bench", REPO / "tests"))
+    return named.startswith(_PLACEHOLDER_FOLDERS) or any((root / named).exists() for root in _ROOTS)
 
 
 def _broken_references(path: Path) -> list[str]:

@@ -57,8 +57,8 @@ def _one(spec: Any, sandboxed: bool, steps: int) -> dict[str, Any]:
 
 def run(quick: bool = False) -> dict[str, Any]:
     """Medians of policy start (s) and step round trip (ms), sandboxed and bare, and their ratios."""
-    from ..evaluation import sandbox
     from ..evaluation.policy.submission import parse_spec
+    from ..evaluation.process import sandbox
 
     machine = machine_info()
     t = time.perf_counter()

@@ -9,21 +9,9 @@ evaluation writing into a results folder; the next server resumes that folder fr
 from __future__ import annotations
 
 import os
-import signal
 import sys
 
-
-def die_with_parent(parent: int) -> None:
-    """Ask Linux to SIGKILL this process when its parent dies; exit at once if the parent is gone already."""
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):  # not Linux: the server's recovery kills leftovers instead
-        pass
-    if os.getppid() != parent:
-        os._exit(1)
+from ..evaluation.process.lifetime import die_with_parent
 
 
 def main(argv: list[str]) -> int:

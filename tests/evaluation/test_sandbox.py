@@ -1,6 +1,6 @@
 """The sandbox of policy processes, check-agent's isolation check, and the spy and forge submissions.
 
-The spy (policies/spy.py) reads the data set's answers through /proc/<ppid>; the forge (policies/forge.py)
+The spy (policies/cheats/spy.py) reads the data set's answers through /proc/<ppid>; the forge (cheats/forge.py)
 rewrites finished results. Each test runs them both ways: without the sandbox they succeed (so they are real
 cheaters), in it they get nothing, and check-agent fails both either way.
 """
@@ -29,8 +29,8 @@ from main_bench.evaluation.process.sandbox import SANDBOX_ENV, SandboxSettings, 
 
 POLICIES = Path(__file__).parent / "policies"
 GOOD = str(POLICIES / "good_random.py")
-SPY = str(POLICIES / "spy.py")
-FORGE = str(POLICIES / "forge.py")
+SPY = f"{POLICIES / 'cheats'}:Spy"
+FORGE = f"{POLICIES / 'cheats'}:Forge"
 KEY = ["split", "task", "agents", "episode_id", "agent_index"]
 
 
@@ -74,17 +74,31 @@ def test_unsandboxed_policy_reaches_everything_the_probe_tries():
         assert found in text, text
 
 
-def test_a_hidden_folder_inside_the_submission_folder_is_empty(tmp_path):
+def test_a_hidden_folder_inside_the_submission_folder_is_left_out_of_its_copy(tmp_path):
     sub = tmp_path / "sub"
     (sub / "data").mkdir(parents=True)
     shutil.copy(GOOD, sub / "policy.py")
     (sub / "data" / "answers.json").write_text("{}")
     spec = parse_spec(str(sub))
-    request = {"read": [str(sub / "data" / "answers.json"), str(sub / "policy.py")]}
+    request = {"read": ["/submission/data/answers.json", "/submission/policy.py", str(sub / "policy.py")]}
     for hidden, readable in (((), 2), ((str(sub / "data"),), 1)):
         with PolicyProcess(spec, Limits(), 0, SandboxSettings(hidden=hidden)) as proc:
             done = proc.probe(request)["succeeded"]
-        assert len(done) == readable and f"read {sub / 'policy.py'}" in done, done
+        assert len(done) == readable and "read /submission/policy.py" in done, done
+
+
+def test_a_file_spec_shows_that_file_only_never_its_folder(tmp_path):
+    folder = tmp_path / "runs"
+    (folder / "oracle_run").mkdir(parents=True)
+    (folder / "oracle_run" / "summary.json").write_text("{}")
+    (folder / "helper.py").write_text("X = 1\n")
+    shutil.copy(GOOD, folder / "policy.py")
+    request = {"read": ["/submission/policy.py", "/submission/helper.py", "/submission/oracle_run/summary.json",
+                        str(folder / "oracle_run" / "summary.json"), str(folder / "helper.py")]}
+    with PolicyProcess(parse_spec(str(folder / "policy.py")), Limits(), 0, SandboxSettings()) as proc:
+        assert proc.probe(request)["succeeded"] == ["read /submission/policy.py"]
+    with PolicyProcess(parse_spec(str(folder)), Limits(), 0, SandboxSettings()) as proc:  # a folder spec: all
+        assert len(proc.probe(request)["succeeded"]) == 3
 
 
 @pytest.mark.parametrize("spec", [SPY, FORGE])
@@ -134,7 +148,7 @@ def test_the_spy_reads_nothing_in_the_sandbox(cli, tiny_dataset, tmp_path):
 
 def test_the_forge_changes_no_result(cli, tiny_dataset, tmp_path):
     forged = _evaluate(cli, tiny_dataset, FORGE, tmp_path / "forge")
-    twin = _evaluate(cli, tiny_dataset, FORGE + ":HonestTwin", tmp_path / "twin")
+    twin = _evaluate(cli, tiny_dataset, f"{POLICIES / 'cheats'}:HonestTwin", tmp_path / "twin")
     assert forged.code == 0 and twin.code == 0, forged.err + twin.err
     pd.testing.assert_frame_equal(_records(tmp_path / "forge"), _records(tmp_path / "twin"))
     summary = load_results(tmp_path / "forge").summary  # every file still matches its hash

@@ -43,11 +43,11 @@ class AgentEndpoint(Protocol):
 class ProcessEndpoint:
     """A submitted `AgentPolicy` in its own `PolicyProcess`; `PolicyError`s become `EpisodeFailure`s."""
 
-    def __init__(self, spec: Any, limits: Any, seed: int, sandbox: Any = None) -> None:
+    def __init__(self, spec: Any, limits: Any, seed: int, sandbox: Any = None, log: Any = None) -> None:
         from ..process.isolation import PolicyProcess
 
         self.agent_id = ""
-        self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent", wait=False)
+        self.process = PolicyProcess(spec, limits, seed, sandbox, role="agent", wait=False, log=log)
 
     def ready(self) -> None:
         """Wait until the submission is loaded (processes of a team load in parallel); raises
@@ -208,7 +208,7 @@ class DecentralizedTeam:
 def _concurrently(calls: list[Callable[[], Any]]) -> list[Any]:
     """Run `calls` on threads (they wait on sockets and processes, not on Python); each call's result, or the
     exception it raised, in order. Never for starting processes: a child asks to die with the thread that
-    started it (`policy_child._die_with_parent`)."""
+    started it (`lifetime.die_with_parent`)."""
     if len(calls) <= 1:
         return [_result(c) for c in calls]
     from concurrent.futures import ThreadPoolExecutor

@@ -19,6 +19,7 @@ from ...errors import InputError, SubmissionError
 from ...scenes.objects import KNOWN_CATEGORIES
 from ..process.isolation import Limits, PolicyError, PolicyProcess
 from ..process.isolation_check import Trap
+from ..process.lifetime import process_alive
 from ..process.sandbox import SandboxSettings
 from .protocol import (
     DEFAULT_MESSAGE_FLOATS,
@@ -292,12 +293,13 @@ def _play(process: _Submission, spec: PolicySpec, settings: CheckSettings, info:
             reply = process.probe(trap.request(spec.root))
     process.close()
     if trap is not None:
-        alive = [p for p in pids if p is None or p == os.getpid() or _pid_alive(p)]
+        alive = [p for p in pids if p is None or p == os.getpid() or process_alive(p)]
         verdict = trap.verdict(reply, spec.root)
         results["isolation"] = _isolation(verdict, settings.sandbox, "" if reply is not None else
                                           "the escape probe did not answer",
                                           "" if not alive else "process "
-                                          f"{', '.join(map(str, alive))} still running after close")
+                                          f"{', '.join(map(str, alive))} still running after close",
+                                          process.refused())
     return actions
 
 
@@ -339,6 +341,16 @@ class _Submission:
 
     def probe(self, request: dict[str, Any]) -> dict[str, Any]:
         return self._procs[0].probe(request)
+
+    def refused(self) -> str:
+        """What the processes tried that the sandbox's seccomp filter refused (empty when nothing)."""
+        counts = [(f"agent_{i}" if len(self._procs) > 1 else "the policy", p.refused_calls)
+                  for i, p in enumerate(self._procs) if p.refused_calls]
+        if not counts:
+            return ""
+        who = ", ".join(f"{name} {n}" for name, n in counts)
+        return (f"its processes made system calls the sandbox refuses ({who}): file locks, inotify, fanotify or kernel keyrings, "
+                "through which processes sharing read-only files could pass bits outside the channel")
 
     def _driver(self) -> Any:
         return self._procs[0] if self._team is None else _FailuresAsErrors(self._team)
@@ -382,8 +394,10 @@ def _isolation(verdict: Any, sandbox: SandboxSettings, *problems: str, skip: boo
     """The isolation check's result from the trap's verdict and any other problem found; with `skip` (the
     policy did not get as far as the probe) a skip unless it already went for the bait."""
     failures = [p for p in problems if p]
-    if verdict.attempts:
-        shown = "; ".join(verdict.attempts[:3]) + ("; ..." if len(verdict.attempts) > 3 else "")
+    bait = [a for a in verdict.attempts if not a.startswith("signalled")]
+    failures += [f"the policy {a}" for a in verdict.attempts if a.startswith("signalled")]
+    if bait:
+        shown = "; ".join(bait[:3]) + ("; ..." if len(bait) > 3 else "")
         failures.append(f"the policy went for the bait data set/results its parent's command line names: {shown}")
     if verdict.escapes:
         where = "in the sandbox" if sandbox.enabled else "without a sandbox (--no-sandbox)"
@@ -412,13 +426,3 @@ def _compare(first: list[dict[str, int]], second: list[dict[str, int]] | None) -
 def _histogram(actions: list[dict[str, int]]) -> str:
     counts = np.bincount([a for step in actions for a in step.values()], minlength=4)
     return ", ".join(f"{name} {n}" for name, n in zip(("found", "forward", "left", "right"), counts, strict=True))
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True

@@ -18,6 +18,7 @@ A submission that cannot be loaded at all raises `SubmissionError` (bad input, C
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import signal
 import socket
@@ -26,13 +27,17 @@ import sys
 import time
 import weakref
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from ...errors import InputError, MainBenchError, SubmissionError
 from ..policy.submission import PolicySpec, ProtocolError
 from .ipc import encode_request, recv_reply, send_parts
 from .policy_child import EXIT_OUT_OF_MEMORY, TORCH_DEVICE_VAR
-from .sandbox import SandboxSettings, launch, popen, signal_of_exit
+from .policy_log import PolicyLog
+from .private_copy import PrivateCopy
+from .sandbox import SandboxSettings, launch, module_location, popen, signal_of_exit
+from .task_limit import TaskGroup
 
 #: The kinds a `PolicyError.reason` starts with.
 REASON_KINDS: tuple[str, ...] = ("exception", "timeout", "invalid_action", "invalid_message", "dead", "memory")
@@ -55,6 +60,12 @@ class Limits:
     threads: int = 1
     #: torch device for the policy ("cuda:0"), given to it as TORCH_DEVICE_VAR; None: the variable is left as is.
     torch_device: str | None = None
+    #: Processes and threads a sandbox may hold at once (its policy process's included).
+    processes: int = 64
+    #: CPU seconds each process of the policy may use over its life; past it the process is killed. A policy
+    #: process that has used half of it is replaced by a fresh one before its next episode, so this bounds the
+    #: CPU of one episode, not of a run.
+    cpu_seconds: int = 3600
 
     def __post_init__(self) -> None:
         for name in ("step_seconds", "reset_seconds", "episode_seconds", "load_seconds"):
@@ -63,8 +74,13 @@ class Limits:
                 raise InputError(f"limit {name} must be a positive number of seconds, got {value!r}")
         if not (isinstance(self.memory_mb, int) and self.memory_mb >= 64):
             raise InputError(f"limit memory_mb must be an integer of at least 64 (MB), got {self.memory_mb!r}")
-        if not (isinstance(self.threads, int) and self.threads >= 1):
-            raise InputError(f"limit threads must be a positive integer, got {self.threads!r}")
+        for name in ("threads", "processes", "cpu_seconds"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+                raise InputError(f"limit {name} must be a positive integer, got {value!r}")
+        if self.processes < self.threads + 2:
+            raise InputError(f"limit processes ({self.processes}) must leave room for the policy's {self.threads} "
+                             "threads and its own two; raise it")
 
 
 class PolicyError(MainBenchError):
@@ -89,22 +105,31 @@ class PolicyProcess:
     The constructor starts the process and waits (up to `limits.load_seconds`) until the submission is loaded;
     a submission that fails to load raises `SubmissionError`. `reset` and `act` raise `PolicyError`. Every
     process runs in the sandbox `sandbox` describes (`sandbox.py`; by default on, refused with `SandboxError`
-    where none can be made).
+    where none can be made), on its own copy of the submission (`private_copy`), made once and kept for its
+    restarts. Its stdout and stderr go to `log` (appended, capped: `policy_log`), or with None to the
+    evaluator's stderr through the same cap.
     """
 
     def __init__(self, spec: PolicySpec, limits: Limits | None = None, seed: int = 0,
-                 sandbox: SandboxSettings | None = None, role: str = "team", wait: bool = True) -> None:
+                 sandbox: SandboxSettings | None = None, role: str = "team", wait: bool = True,
+                 log: Path | None = None) -> None:
         self.spec = spec
         self.role = role
         self.limits = limits or Limits()
         self.seed = int(seed)
         self.sandbox = sandbox or SandboxSettings()
+        self.log = log
+        self._copy: PrivateCopy | None = None
         self.policy_name = ""
         #: The roles (`team`, `agent`) whose protocol the loaded policy follows (`submission.policy_roles`).
         self.roles: tuple[str, ...] = ()
         self.load_seconds = 0.0
         #: Seconds the last call spent inside the policy, as measured in its own process.
         self.last_policy_seconds = 0.0
+        #: System calls the sandbox refused, as the process reported them (with `SandboxSettings.report_refused`).
+        self.refused_calls = 0
+        #: CPU seconds the current process has used, as it reported them.
+        self.cpu_used = 0.0
         self._proc: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
         self._finalizer: weakref.finalize | None = None
@@ -141,8 +166,9 @@ class PolicyProcess:
 
     def send_reset(self, info: Any) -> None:
         """The first half of `reset`: send the request; `receive()` waits for the answer. Lets an evaluator
-        start several processes' resets before waiting for any."""
-        if not self.alive:
+        start several processes' resets before waiting for any. A process that has used half its CPU-time limit
+        is replaced first (policies keep no state across episodes, so results do not change)."""
+        if not self.alive or self.cpu_used >= self.limits.cpu_seconds / 2:
             try:
                 self.restart()
             except SubmissionError as exc:  # it loaded before: failing to load again is this episode's failure
@@ -196,8 +222,9 @@ class PolicyProcess:
         self.ready()
 
     def close(self) -> None:
-        """Ask the process to exit (1 s), then kill it; idempotent."""
+        """Ask the process to exit (1 s), then kill it and remove its copy of the submission; idempotent."""
         if self._proc is None:
+            self._remove_copy()
             return
         if self.alive and self._sock is not None:
             with contextlib.suppress(OSError, EOFError, TimeoutError, ValueError, subprocess.TimeoutExpired):
@@ -206,6 +233,13 @@ class PolicyProcess:
                 recv_reply(self._sock, deadline)
                 self._proc.wait(timeout=max(0.0, deadline - time.monotonic()))
         self._kill()
+        self._remove_copy()
+
+    def _remove_copy(self) -> None:
+        """Delete the submission's copy; a later start makes a fresh one."""
+        if self._copy is not None:
+            self._copy.remove()
+            self._copy = None
 
     def __enter__(self) -> PolicyProcess:
         return self
@@ -225,18 +259,38 @@ class PolicyProcess:
         if self.limits.torch_device is not None:
             extra_env[TORCH_DEVICE_VAR] = self.limits.torch_device
         command = [sys.executable, "-m", "main_bench.evaluation.process.policy_child", str(child.fileno())]
-        module = self.spec.target if self.spec.kind == "module" else None
+        sandboxed = self.sandbox.enabled
+        if sandboxed and self._copy is None:
+            module = module_location(self.spec.target) if self.spec.kind == "module" else None
+            self._copy = PrivateCopy(self.spec, module, self.sandbox.hidden)
+            weakref.finalize(self, self._copy.remove)
+        log = PolicyLog(self.log)
+        group = TaskGroup(self.limits.processes, self.limits.memory_mb << 20) if sandboxed else None
         try:
-            how = launch(command, self.spec.root, module, self.sandbox, self.limits.memory_mb, extra_env)
-            proc = popen(how, (child.fileno(),), _stdout_target())
+            how = launch(command, self._copy.folder if self._copy else None, self.sandbox, self.limits.memory_mb,
+                         extra_env)
+            proc = popen(how, (child.fileno(),), log.write_fd, log.write_fd,
+                         group.preexec if group is not None and group.active else None)
+        except BaseException:
+            log.close(0)
+            if group is not None:
+                group.remove()
+            raise
         finally:
             child.close()
+            log.child_started()
+            if group is not None:
+                group.started()
         self._proc, self._sock = proc, parent
-        self._finalizer = weakref.finalize(self, _kill_process, proc, parent)
+        self.cpu_used = 0.0
+        self._finalizer = weakref.finalize(self, _kill_process, proc, parent, log, group)
         self._episode_used = 0.0
-        boot = {"spec": (self.spec.kind, self.spec.target, self.spec.attr, self.spec.root), "seed": self.seed,
-                "role": self.role,
-                "memory_mb": self.limits.memory_mb, "threads": self.limits.threads, "sys_path": list(sys.path)}
+        spec = self._copy.inside if self._copy else self.spec
+        boot = {"spec": (spec.kind, spec.target, spec.attr, spec.root), "seed": self.seed, "role": self.role,
+                "memory_mb": self.limits.memory_mb, "threads": self.limits.threads,
+                "processes": self.limits.processes if sandboxed else None, "cpu_seconds": self.limits.cpu_seconds,
+                "sys_path": [*(self._copy.sys_path if self._copy else ()), *sys.path],
+                "report_refused": self.sandbox.report_refused}
         started = time.monotonic()
         self._post(boot, started + self.limits.load_seconds, "loading")
         self._loading = started
@@ -298,6 +352,13 @@ class PolicyProcess:
             raise PolicyError(f"invalid_action: unreadable reply from the policy process ({exc})") from None
 
     def _checked(self, reply: dict[str, Any], op: str) -> dict[str, Any]:
+        if isinstance(reply, dict):  # read before the checks: an error reply still reports them
+            cpu = reply.get("cpu_seconds", 0.0)
+            if isinstance(cpu, int | float) and not isinstance(cpu, bool) and math.isfinite(cpu):
+                self.cpu_used = float(cpu)
+            refused = reply.get("refused", 0)
+            if isinstance(refused, int) and not isinstance(refused, bool):
+                self.refused_calls = max(self.refused_calls, refused)
         try:
             reply, self.last_policy_seconds = check_reply(reply, self._seq, op, self.limits.memory_mb)
         except PolicyError as exc:
@@ -324,7 +385,8 @@ class PolicyProcess:
                 name = signal.Signals(-code).name
             except ValueError:
                 name = str(-code)
-            hint = " (out of memory?)" if -code == signal.SIGKILL else ""
+            hint = {signal.SIGKILL: " (out of memory?)",
+                    signal.SIGXCPU: f" (CPU time limit {self.limits.cpu_seconds} s)"}.get(-code, "")
             return f"dead: killed by signal {name}{hint}"
         return f"dead: exit code {code}"
 
@@ -429,15 +491,7 @@ def _shown(value: Any) -> str:
     return f"{_text(value)} ({type(value).__name__})"
 
 
-def _stdout_target() -> int | None:
-    """The policy's stdout goes to our stderr, keeping our stdout (JSON output) clean."""
-    try:
-        return sys.stderr.fileno()
-    except (AttributeError, OSError, ValueError):
-        return subprocess.DEVNULL
-
-
-def _kill_process(proc: subprocess.Popen, sock: socket.socket) -> None:
+def _kill_process(proc: subprocess.Popen, sock: socket.socket, log: PolicyLog, group: TaskGroup | None) -> None:
     with contextlib.suppress(OSError):
         sock.close()
     with contextlib.suppress(ProcessLookupError, PermissionError):
@@ -447,3 +501,6 @@ def _kill_process(proc: subprocess.Popen, sock: socket.socket) -> None:
             proc.kill()
     with contextlib.suppress(subprocess.TimeoutExpired):
         proc.wait(timeout=5.0)
+    log.close()
+    if group is not None:
+        group.remove()

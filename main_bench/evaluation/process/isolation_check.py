@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .bait_parent import DECOY_REPORT
 from .sandbox import SANDBOX_ENV, Bind, SandboxSettings
 
 _EVENT = struct.Struct("iIII")
@@ -148,7 +149,7 @@ class Trap:
                    "--seed", "0", "--")
         binds = (*base.binds, Bind(str(self.episodes)), Bind(str(self.results), writable=True))
         return SandboxSettings(enabled=base.enabled, hidden=base.hidden, binds=binds if base.enabled else (),
-                               wrapper=wrapper)
+                               wrapper=wrapper, report_refused=True)
 
     def request(self, root: Path | None) -> dict[str, Any]:
         """The escape probe (`escape_probe.try_escapes`) for a policy whose folder is `root`."""
@@ -184,7 +185,13 @@ class Trap:
                 text = f"{what} {path}"
                 if text not in attempts:
                     attempts.append(text)
+        report = self.results / DECOY_REPORT
+        attempts = [a for a in attempts if not a.endswith(str(report))]
         attempts.sort(key=lambda text: not text.startswith("wrote"))  # writes first: the worse attempt
+        if report.is_file():
+            attempts.insert(0, f"signalled ({report.read_text()[:20]}) a decoy teammate policy process it found "
+                               "through /proc")
+            report.unlink()
         return IsolationVerdict(tuple(dict.fromkeys(escapes)), tuple(attempts), self.note)
 
     def close(self) -> None:

@@ -1,12 +1,14 @@
 """The policy process: `python -m main_bench.evaluation.process.policy_child FD`, started by `PolicyProcess`.
 
-It limits its own address space and threads, loads the submission, then answers requests on the socket FD:
+It limits its own address space, process count (`RLIMIT_NPROC`, counted in the sandbox's own user namespace)
+and CPU time, loads the submission, then answers requests on the socket FD:
 `("reset", seq, EpisodeInfo)`, `("act", seq, observations)`, `("close", seq, None)`, and from `check-agent`
 only `("probe", seq, request)` (`escape_probe.try_escapes`); an agent policy (role `agent`, modes silent and
 comm) gets `("reset", seq, AgentInfo)` and `("act", seq, (observation, inbox))`. Replies are JSON; actions and
 messages are described, not judged (the evaluator validates them): ints as ints, anything else by its type and
 repr.
-Its stdout goes to the evaluator's stderr so that a policy's prints never mix with machine-readable output.
+Its stdout and stderr are one pipe into the policy's capped log (`policy_log`), never a descriptor of the
+evaluator's.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from .ipc import recv_request, send_reply
+from .lifetime import die_with_parent
 
 #: Environment variable naming the torch device a policy should run on ("cpu" when unset; `evaluate --gpu N`
 #: sets "cuda:N"); the shipped comm baseline follows it, other submissions may.
@@ -46,38 +49,52 @@ def main(argv: list[str]) -> int:
             sys.path.insert(0, entry)
     from ..policy import protocol  # noqa: F401 - decodes EpisodeInfo; our own code, imported before the memory limit
 
-    _die_with_parent()
+    die_with_parent()
     _limit_memory(boot["memory_mb"])
+    _limit_processes(boot.get("processes"), boot.get("cpu_seconds"))
+    refused = _count_refused() if boot.get("report_refused") else None
     policy = _load(sock, boot)
     if policy is None:
         return 0
-    return _serve(sock, policy, boot.get("role", "team"))
+    return _serve(sock, policy, boot.get("role", "team"), refused)
+
+
+def _count_refused() -> list[int]:
+    """Count the SIGSYS signals of system calls the sandbox's seccomp filter refuses (`check-agent` only)."""
+    count = [0]
+
+    def refused(*_: object) -> None:
+        count[0] += 1
+
+    signal.signal(signal.SIGSYS, refused)
+    return count
 
 
 def _limit_memory(memory_mb: int) -> None:
     # Soft and hard limit alike, so the policy cannot raise its own limit. A CUDA policy reserves far more
     # address space than it uses, so there the limit is on data (writable private memory) instead.
     which = resource.RLIMIT_DATA if os.environ.get(TORCH_DEVICE_VAR, "").startswith("cuda") else resource.RLIMIT_AS
-    limit = int(memory_mb) * 1024 * 1024
+    _cap(which, int(memory_mb) * 1024 * 1024)
+
+
+def _cap(which: int, limit: int, hard_extra: int = 0) -> None:
+    """Set the soft limit `which` to `limit` and the hard one to `limit + hard_extra`, never above the hard
+    limit already in force (the policy can then not raise its own)."""
     _, hard = resource.getrlimit(which)
     if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
-    resource.setrlimit(which, (limit, limit))
+        limit, hard_extra = min(limit, hard), 0
+    resource.setrlimit(which, (limit, limit + hard_extra))
 
 
-def _die_with_parent() -> None:
-    """Linux: have the kernel SIGKILL this process when the evaluator worker that started it dies, so a policy
-    busy in `act` is never left running after its evaluator was killed."""
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        pr_set_pdeathsig = 1
-        libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
-    except (OSError, AttributeError):
-        return
+def _limit_processes(processes: int | None, cpu_seconds: int | None) -> None:
+    """Soft and hard limits alike on the processes and threads of this sandbox's user (its own user namespace)
+    and on each process's CPU seconds (SIGXCPU at the limit, SIGKILL a second later). Every reply says how many
+    CPU seconds this process has used, so the evaluator replaces it between episodes before it nears the
+    limit."""
+    if processes:
+        _cap(resource.RLIMIT_NPROC, int(processes))
+    if cpu_seconds:
+        _cap(resource.RLIMIT_CPU, int(cpu_seconds), hard_extra=1)
 
 
 def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
@@ -104,7 +121,7 @@ def _load(sock: socket.socket, boot: dict[str, Any]) -> Any:
     return policy
 
 
-def _serve(sock: socket.socket, policy: Any, role: str) -> int:
+def _serve(sock: socket.socket, policy: Any, role: str, refused: list[int] | None) -> int:
     from ..policy.submission import seed_everything
 
     while True:
@@ -136,6 +153,10 @@ def _serve(sock: socket.socket, policy: Any, role: str) -> int:
             reply = {"status": "error", **_describe(exc)}
         reply["seq"] = seq
         reply["seconds"] = time.perf_counter() - start
+        used = resource.getrusage(resource.RUSAGE_SELF)
+        reply["cpu_seconds"] = used.ru_utime + used.ru_stime
+        if refused:
+            reply["refused"] = refused[0]
         _reply(sock, reply)
 
 

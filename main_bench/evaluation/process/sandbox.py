@@ -1,23 +1,26 @@
 """The sandbox of a policy process: bubblewrap (`bwrap`) around `python -m main_bench.evaluation.process.policy_child`.
 
-In: the command of the policy process, the submission's folder, the paths it must never see (data set, results,
-caches, scenes) and its memory limit. Out: the command line, environment and argument pipe that start it inside
-a sandbox with
+In: the command of the policy process, the private copy of the submission (`private_copy`), the paths it must
+never see (data set, results, caches, scenes) and its memory limit. Out: the command line, environment and pipes
+that start it inside a sandbox with
 
 - a read-only view of the system libraries (`/usr`, `/lib*`, `/bin`, `/sbin`, `/etc`), the Python installation
-  (`sys.prefix`, `sys.base_prefix` and the exec prefixes), the toolkit's `main_bench` package and the
-  submission's own folder (module specs: the top-level package or module file they import from);
-- a private writable `/tmp` (a tmpfs of at most the policy's memory limit with bubblewrap 0.8 or later), the
-  working directory `/tmp`, and
-  nothing else writable (the sandbox's root is read-only);
+  (`sys.prefix`, `sys.base_prefix` and the exec prefixes), the toolkit's `main_bench` package at
+  `/opt/main-bench/main_bench` (wherever and however it is installed), and its own copy of the submission at
+  `/submission` (no inode of it shared with a teammate's process);
+- a private writable `/tmp` and `/dev/shm`, each a tmpfs of at most half the policy's memory limit (bubblewrap
+  0.8 or later), the working directory `/tmp`, and nothing else writable (the sandbox's root is read-only);
 - new user, pid, network, IPC, UTS and cgroup namespaces (`--unshare-all`): no network but a loopback that is
-  down, its own `/proc` in which the evaluator's processes do not exist, no capabilities, a new session (no
-  controlling terminal to inject keystrokes into), killed with its parent;
+  down, its own `/proc` in which neither the evaluator's nor a teammate's processes exist, no abstract Unix
+  socket of another sandbox, no capabilities, a new session (no controlling terminal to inject keystrokes
+  into), killed with its parent;
+- a seccomp filter (`seccomp.py`) refusing file locks, inotify, fanotify and kernel keyrings, through which
+  the shared read-only files would otherwise carry bits between sandboxes;
 - only the environment `SANDBOX_ENV` (no variable of the evaluator's), and bubblewrap's own options passed
   through a pipe (`--args`), so neither the sandbox's pid 1 nor the policy sees a path of the evaluator.
 
-Inherited file descriptors (the IPC socket, stdout) pass through bubblewrap unchanged. A path to hide that lies
-inside a folder the sandbox shows (a data set inside the submission's folder, say) is covered by an empty
+Inherited file descriptors (the IPC socket, the output pipe) pass through bubblewrap unchanged. A path to hide
+that lies inside a folder the sandbox shows (results inside the toolkit's folder, say) is covered by an empty
 read-only tmpfs (a folder) or by `/dev/null` (a file).
 """
 
@@ -35,13 +38,17 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InputError
+from .private_copy import SUBMISSION_MOUNT
+from .seccomp import program as seccomp_program
 
+#: The whole environment of a sandboxed policy process (thread variables are added by `PolicyProcess`).
+#: Where the sandbox shows the toolkit's `main_bench` package (its parent folder is on the policy's PYTHONPATH).
+TOOLKIT_MOUNT = Path("/opt/main-bench")
+#: The `main_bench` package this evaluator runs (shown read-only at `TOOLKIT_MOUNT`).
 PACKAGE_DIR = Path(__file__).resolve().parents[2]
-#: The whole environment of a sandboxed policy process (thread variables are added by `PolicyProcess`); the
-#: toolkit is importable from where this evaluator imported it (an installed copy or a source checkout).
 SANDBOX_ENV: dict[str, str] = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp",
                                "LANG": "C.UTF-8", "PYTHONDONTWRITEBYTECODE": "1", "PYTHONNOUSERSITE": "1",
-                               "PYTHONPATH": str(PACKAGE_DIR.parent)}
+                               "PYTHONPATH": str(TOOLKIT_MOUNT)}
 SYSTEM_DIRS: tuple[str, ...] = ("/usr", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32", "/etc")
 #: Device nodes a GPU policy needs, shown when they exist.
 GPU_DEVICES: tuple[str, ...] = ("/dev/nvidiactl", "/dev/nvidia-uvm", "/dev/nvidia-uvm-tools", "/dev/nvidia0",
@@ -69,24 +76,27 @@ class SandboxSettings:
     """How policy processes are confined. `enabled` False runs them as plain child processes (`--no-sandbox`).
 
     `hidden`: paths the policy must never see even where they lie inside a folder the sandbox shows.
-    `binds` and `wrapper` serve `check-agent`'s bait: extra folders, and a command run between the sandbox and
-    the policy process (the policy process's parent)."""
+    `binds`, `wrapper` and `report_refused` serve `check-agent`: extra folders (the bait), a command run between
+    the sandbox and the policy process (the policy process's parent), and system calls the seccomp filter
+    refuses raising SIGSYS, which the policy process counts and reports."""
 
     enabled: bool = True
     hidden: tuple[str, ...] = ()
     binds: tuple[Bind, ...] = ()
     wrapper: tuple[str, ...] = ()
+    report_refused: bool = False
 
 
 @dataclass(frozen=True)
 class Launch:
-    """How to start a policy process: the command, its environment and working directory, and (sandboxed) the
-    bubblewrap options that `popen` writes into a pipe named by `--args` in place of `{args_fd}`."""
+    """How to start a policy process: the command, its environment and working directory, and (sandboxed) what
+    `popen` writes into pipes whose read ends replace placeholders of the command: bubblewrap's options
+    (`{args_fd}`, named by `--args`) and its seccomp filter (`{seccomp_fd}`, named by `--seccomp`)."""
 
     argv: tuple[str, ...]
     env: dict[str, str]
     cwd: str | None
-    args: bytes = b""
+    pipes: tuple[tuple[str, bytes], ...] = ()
 
 
 def bwrap_path() -> str | None:
@@ -117,8 +127,7 @@ def sandbox_problem() -> str | None:
     if exe is None:
         return "bubblewrap (bwrap) is not installed"
     options = sandbox_options(None, SandboxSettings(), memory_mb=64)
-    probe = Launch((exe, "--args", "{args_fd}", sys.executable, "-c", "pass"), dict(SANDBOX_ENV), "/",
-                   _encode(options))
+    probe = Launch((*_bwrap_argv(exe), sys.executable, "-c", "pass"), dict(SANDBOX_ENV), "/", _pipes(options))
     try:
         proc = popen(probe, (), subprocess.PIPE, stderr=subprocess.PIPE)
         _, err = proc.communicate(timeout=30)
@@ -141,47 +150,51 @@ def require_sandbox() -> None:
         raise SandboxError(f"no sandbox for the policy process: {problem}; {NO_SANDBOX_HINT}")
 
 
-def launch(command: list[str], root: Path | None, module: str | None, settings: SandboxSettings,
-           memory_mb: int, extra_env: dict[str, str]) -> Launch:
-    """How to start `command` (the policy process) under `settings`; `root` is the submission's folder,
-    `module` the top-level module of a module spec. Without a sandbox: as today, with the wrapper in front."""
+def launch(command: list[str], submission: Path | None, settings: SandboxSettings, memory_mb: int,
+           extra_env: dict[str, str]) -> Launch:
+    """How to start `command` (the policy process) under `settings`; `submission` is the policy's private copy
+    of the submission (`private_copy.PrivateCopy.folder`), shown at `/submission`. Without a sandbox: as it
+    is, with the wrapper in front."""
     argv = [*settings.wrapper, *command]
     if not settings.enabled:
         return Launch(tuple(argv), {**os.environ, **extra_env}, None)
     require_sandbox()
     exe = bwrap_path()
     assert exe is not None
-    shown = [p for p in (root, module_location(module)) if p is not None]
-    options = sandbox_options(shown, settings, memory_mb)
+    options = sandbox_options(submission, settings, memory_mb)
     for name, value in {**SANDBOX_ENV, **extra_env}.items():
         options += ["--setenv", name, value]
-    return Launch((exe, "--args", "{args_fd}", *argv), dict(SANDBOX_ENV), "/", _encode(options))
+    return Launch((*_bwrap_argv(exe), *argv), dict(SANDBOX_ENV), "/", _pipes(options, settings.report_refused))
 
 
-def popen(how: Launch, pass_fds: tuple[int, ...], stdout: int | None, stderr: int | None = None
-          ) -> subprocess.Popen:
-    """Start `how` in its own session with only `pass_fds` (and the `--args` pipe) inherited."""
-    read = write = -1
+def popen(how: Launch, pass_fds: tuple[int, ...], stdout: int | None, stderr: int | None = None,
+          preexec: Any = None) -> subprocess.Popen:
+    """Start `how` in its own session with only `pass_fds` (and the read ends of its pipes) inherited;
+    `preexec` runs in the child before it executes the command."""
     argv = list(how.argv)
-    fds = tuple(pass_fds)
+    fds = list(pass_fds)
+    opened: list[int] = []
     try:
-        if how.args:
+        for placeholder, data in how.pipes:
             read, write = os.pipe()
-            os.write(write, how.args)  # a few kB: fits the pipe's buffer, so this never blocks
-            os.close(write)
-            write = -1
-            argv = [str(read) if a == "{args_fd}" else a for a in argv]
-            fds = (*fds, read)
-        return subprocess.Popen(argv, pass_fds=fds, stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr,
-                                env=how.env, cwd=how.cwd, start_new_session=True, close_fds=True)
+            opened += [read, write]
+            os.write(write, data)  # a few kB: fits the pipe's buffer, so this never blocks
+            argv = [str(read) if a == placeholder else a for a in argv]
+            fds.append(read)
+        for fd in opened[1::2]:
+            os.close(fd)
+        opened = opened[::2]
+        return subprocess.Popen(argv, pass_fds=tuple(fds), stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr,
+                                env=how.env, cwd=how.cwd, start_new_session=True, close_fds=True,
+                                preexec_fn=preexec)
     finally:
-        for fd in (read, write):
-            if fd >= 0:
+        for fd in opened:
+            with contextlib.suppress(OSError):
                 os.close(fd)
 
 
-def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_mb: int) -> list[str]:
-    """bubblewrap's options (see the module docstring); `shown`: the submission's folder or module file."""
+def sandbox_options(submission: Path | None, settings: SandboxSettings, memory_mb: int) -> list[str]:
+    """bubblewrap's options (see the module docstring); `submission`: the private copy shown at `/submission`."""
     opts = ["--unshare-all", "--die-with-parent", "--new-session", "--cap-drop", "ALL", "--clearenv"]
     bound: list[Path] = []
 
@@ -200,25 +213,32 @@ def sandbox_options(shown: list[Path] | None, settings: SandboxSettings, memory_
     opts += ["--proc", "/proc", "--dev", "/dev"]
     for dev in GPU_DEVICES:
         opts += ["--dev-bind-try", dev, dev]
-    if bwrap_version() >= SIZE_OPTION_SINCE:
-        opts += ["--size", str(int(memory_mb) * 1024 * 1024)]
-    opts += ["--tmpfs", "/tmp"]  # before what may lie under /tmp
+    for folder in ("/dev/shm", "/tmp"):  # /tmp before what may lie under it
+        if bwrap_version() >= SIZE_OPTION_SINCE:
+            opts += ["--size", str(tmpfs_bytes(memory_mb))]
+        opts += ["--tmpfs", folder]
     for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}):
         show(Path(prefix).resolve())
         if Path(prefix) != Path(prefix).resolve():
             show(Path(prefix))
-    show(PACKAGE_DIR)
-    for path in shown or ():
-        show(path.resolve())
+    toolkit = TOOLKIT_MOUNT / PACKAGE_DIR.name
+    opts += ["--ro-bind", str(PACKAGE_DIR), str(toolkit)]
+    if submission is not None:
+        opts += ["--ro-bind", str(submission), str(SUBMISSION_MOUNT)]
     for bind in settings.binds:
         opts.extend(["--bind" if bind.writable else "--ro-bind", bind.path, bind.path])
     for hidden in settings.hidden:
-        path = Path(hidden).resolve()
-        if any(_inside(path, b) for b in bound):
-            if path.is_dir():
-                opts += ["--tmpfs", str(path), "--remount-ro", str(path)]
-            elif path.exists():
-                opts += ["--ro-bind", "/dev/null", str(path)]
+        source = Path(hidden).resolve()
+        if _inside(source, PACKAGE_DIR):
+            target = toolkit / source.relative_to(PACKAGE_DIR)
+        elif any(_inside(source, b) for b in bound):
+            target = source
+        else:
+            continue
+        if source.is_dir():
+            opts += ["--tmpfs", str(target), "--remount-ro", str(target)]
+        elif source.exists():
+            opts += ["--ro-bind", "/dev/null", str(target)]
     opts += ["--remount-ro", "/", "--chdir", "/tmp"]
     return opts
 
@@ -233,9 +253,15 @@ def evaluation_sandbox(settings: Any, manifest: Any) -> SandboxSettings:
     return SandboxSettings(enabled=settings.sandbox, hidden=tuple(str(Path(p).resolve()) for p in hidden))
 
 
+def tmpfs_bytes(memory_mb: int) -> int:
+    """The size of each of a sandbox's two tmpfs (`/tmp`, `/dev/shm`): half the memory limit, so that files
+    kept in memory stay within it."""
+    return int(memory_mb) * 1024 * 1024 // 2
+
+
 def module_location(module: str | None) -> Path | None:
     """Where a module spec's top-level module lives (its package folder or its file), found without importing
-    it; None when it is not found or lies in the Python installation already shown."""
+    it; None when it is not found."""
     if not module:
         return None
     top = module.split(".", 1)[0]
@@ -256,8 +282,15 @@ def signal_of_exit(code: int | None) -> int | None:
     return None
 
 
-def _encode(options: list[str]) -> bytes:
-    return b"".join(o.encode() + b"\0" for o in options)
+def _bwrap_argv(exe: str) -> tuple[str, ...]:
+    return (exe, "--seccomp", "{seccomp_fd}", "--args", "{args_fd}") if seccomp_program() else (
+        exe, "--args", "{args_fd}")
+
+
+def _pipes(options: list[str], trap: bool = False) -> tuple[tuple[str, bytes], ...]:
+    args = b"".join(o.encode() + b"\0" for o in options)
+    seccomp = seccomp_program(trap=trap)
+    return (("{args_fd}", args),) + ((("{seccomp_fd}", seccomp),) if seccomp else ())
 
 
 def _inside(path: Path, folder: Path) -> bool:

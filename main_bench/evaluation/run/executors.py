@@ -14,6 +14,7 @@ import contextlib
 import gc
 import importlib.abc
 import multiprocessing as mp
+import os
 import pickle
 import queue
 import sys
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...worker_threads import fork_is_safe, single_threaded_children
+from ..process.lifetime import die_with_parent
 from .chunks import Chunk
 from .settings import EvalSettings
 from .worker import WorkerContext
@@ -108,7 +110,10 @@ def without_pandas() -> None:
 
 
 def _local_worker(settings: EvalSettings, wid: int, jobs: Any, results: Any, warm: bool,
-                  progress_every: float | None) -> None:
+                  progress_every: float | None, parent: int | None = None) -> None:
+    # killed with the process that started it (the command, or the forkserver that dies with the command): a
+    # worker left behind would go on writing parts and ledger entries without the results folder's lock
+    die_with_parent(parent)
     ctx = None
     if warm:
         without_pandas()
@@ -209,8 +214,9 @@ class LocalWorkers:
         self.finished = False
         self.jobs = [context.Queue() for _ in range(n)]
         self.results = context.Queue()
+        parent = os.getpid() if warm else None
         self.procs = [context.Process(target=_local_worker,
-                                      args=(settings, k, self.jobs[k], self.results, warm, progress_every),
+                                      args=(settings, k, self.jobs[k], self.results, warm, progress_every, parent),
                                       daemon=False) for k in range(n)]
         if warm:
             # what this process holds now is never collected, here or in a worker: a worker's collections then do

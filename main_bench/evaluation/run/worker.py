@@ -9,9 +9,11 @@ data set's start state, the policy is reset with a seed from (evaluation seed, e
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -53,7 +55,8 @@ class _IsolatedPolicy:
         from ..process.sandbox import evaluation_sandbox
 
         sandbox = evaluation_sandbox(settings, manifest)
-        self._proc = PolicyProcess(parse_spec(settings.agent), process_limits(settings), settings.seed, sandbox)
+        self._proc = PolicyProcess(parse_spec(settings.agent), process_limits(settings), settings.seed, sandbox,
+                                   log=policy_log_path(settings, "team"))
 
     def reset(self, info: Any) -> None:
         from ..process.isolation import PolicyError
@@ -209,7 +212,18 @@ def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[in
     from ..process.sandbox import evaluation_sandbox
 
     limits, spec, sandbox = process_limits(settings), parse_spec(settings.agent), evaluation_sandbox(settings, manifest)
-    return (lambda i: ProcessEndpoint(spec, limits, settings.seed, sandbox)), False
+    return (lambda i: ProcessEndpoint(spec, limits, settings.seed, sandbox,
+                                      policy_log_path(settings, f"agent_{i}"))), False
+
+
+#: Folder of the results folder holding the policy processes' output (`policy_log`).
+LOGS_FOLDER = "logs"
+
+
+def policy_log_path(settings: EvalSettings, label: str) -> Path:
+    """The capped log of one policy process of this worker process: `logs/<label>-<worker pid>.log` in the
+    results folder (`label`: `team`, or `agent_<i>`)."""
+    return Path(settings.out) / LOGS_FOLDER / f"{label}-{os.getpid()}.log"
 
 
 def process_limits(settings: EvalSettings) -> Any:
