@@ -46,12 +46,12 @@ def seal_results(root: Path, summary: dict, parts: dict[tuple[str, str, int], tu
     completed with the settings' `episodes` and `agent`, the tracks' episode ids, the episode count and the
     file hashes. Returns the summary written.
     """
-    from main_bench.evaluation import ledger
+    from main_bench.evaluation.output import ledger
     from main_bench.evaluation.run.chunks import Chunk
 
     dataset = summary["dataset"]
     spec = (summary.get("submission") or {}).get("spec")
-    settings = {**(summary.get("settings") or {}), "episodes": dataset["path"], "agent": spec}
+    settings = {"episodes": dataset["path"], "agent": spec, **(summary.get("settings") or {})}
     identity = {**settings, "manifest_hash": dataset["manifest_hash"], "task_rules": summary.get("task_rules")}
     chunks = [Chunk(s, t, int(n), 0, tuple(ids)) for (s, t, n), (ids, _) in sorted(parts.items())]
     seal = ledger.seal_document(identity, chunks)
@@ -70,10 +70,29 @@ def seal_results(root: Path, summary: dict, parts: dict[tuple[str, str, int], tu
     return done
 
 
+def reseal(root: Path) -> dict:
+    """Seal a hand-made results folder again after its test edited `summary.json` on purpose (to stand for what
+    `evaluate` would have recorded): its tracks' episode ids and part files as the summary lists them."""
+    import shutil
+
+    summary = json.loads((root / "summary.json").read_text())
+    settings = summary.setdefault("settings", {})
+    settings["episodes"] = summary["dataset"]["path"]  # as evaluate records them: one data set, one spec
+    if "agent" in settings:
+        summary["submission"]["spec"] = settings["agent"]
+    parts = {}
+    for key, track in summary["tracks"].items():
+        split, task, n = key.split("/")
+        folder = f"split={split}/task={task}/agents={n}/"
+        parts[(split, task, int(n))] = (track["episode_ids"], [root / f for f in sorted(summary["files"]) if folder in f])
+    shutil.rmtree(root / "ledger")
+    return seal_results(root, summary, parts)
+
+
 def rehash_part(root: Path, path: Path, like: Path | None = None) -> None:
     """Record `path`'s current SHA-256 where `evaluate` keeps it: in the ledger entry that lists `like` (default:
     `path` itself) and in summary.json's files. For tests that edit or add a part file on purpose."""
-    from main_bench.evaluation import ledger
+    from main_bench.evaluation.output import ledger
 
     rel = (like or path).relative_to(root).as_posix()
     new = ledger.file_hashes(root, [path])

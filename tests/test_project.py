@@ -41,7 +41,7 @@ def test_ruff_is_clean():
 #: Third-party modules that only optional extras provide: main_bench imports them inside the functions that need
 #: them, and each must be declared by an extra. Everything else main_bench imports must be a base requirement.
 EXTRA_MODULES = {"ray": "ray", "torch": "torch", "networkx": "bench", "tensorboard": "train", "starlette": "serve",
-                 "uvicorn": "serve"}
+                 "uvicorn": "serve", "anyio": "serve"}
 
 
 def _requirement_names(requirements: list[str]) -> set[str]:

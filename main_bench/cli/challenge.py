@@ -10,12 +10,13 @@ from typing import Any
 import typer
 
 from ..errors import ChallengeError, InputError
+from ..numfmt import fraction, interval
 from .common import JsonOption, emit
 
 app = typer.Typer(help="Make a challenge folder and its teams (then `main-bench serve` it).", rich_markup_mode=None,
                   no_args_is_help=True)
 team_app = typer.Typer(help="Teams of a challenge.", rich_markup_mode=None, no_args_is_help=True)
-app.add_typer(team_app, name="team")
+app.add_typer(team_app, name="team", short_help="Teams of a challenge and their tokens.")
 
 
 @app.callback()
@@ -46,7 +47,7 @@ def _phases(specs: list[str], hidden: list[str]) -> tuple[Any, ...]:
     return tuple(phases)
 
 
-@app.command("init")
+@app.command("init", short_help="Make a challenge folder: phases, data sets, secrets, rules.")
 def init(
     folder: Path = typer.Argument(..., help="The challenge folder to make."),
     phase: list[str] = typer.Option(..., "--phase", help="NAME=DATASET[@SPLIT] (repeatable; the split defaults "
@@ -129,7 +130,7 @@ def _render_init(d: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-@team_app.command("add")
+@team_app.command("add", short_help="Add a team; print its token once.")
 def team_add(
     name: str = typer.Argument(..., help="The team's name."),
     challenge: Path = typer.Option(Path("."), "--challenge", help="The challenge folder."),
@@ -215,13 +216,13 @@ def _render_submit(d: dict[str, Any]) -> str:
     for key, t in ((sub.get("scores") or {}).get("tracks") or {}).items():
         spl = t["spl"]
         if spl["mean"] is not None:
-            lines.append(f"  {key}: SPL {spl['mean']:.3f} [{spl['ci_low']:.3f}, {spl['ci_high']:.3f}], success "
-                         f"{t['success']['mean']:.3f} ({t['episodes']} episodes)")
+            lines.append(f"  {key}: SPL {fraction(spl['mean'])} {interval(spl['ci_low'], spl['ci_high'])}, success "
+                         f"{fraction(t['success']['mean'])} ({t['episodes']} episodes)")
     return "\n".join(lines)
 
 
 def register(root: typer.Typer) -> None:
     """Add `challenge`, `serve` and `submit` to the root command."""
-    root.add_typer(app, name="challenge")
-    root.command("serve")(serve)
-    root.command("submit")(submit)
+    root.add_typer(app, name="challenge", short_help="Set up a challenge: phases, teams and their tokens.")
+    root.command("serve", short_help="Host a challenge: take, score and publish submissions.")(serve)
+    root.command("submit", short_help="Pack, upload and follow a policy folder on a server.")(submit)

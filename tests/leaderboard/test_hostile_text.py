@@ -8,6 +8,7 @@ import json
 import re
 
 from lb_fixtures import episodes_dir, make_results  # noqa: F401  (episodes_dir is a fixture)
+from mb_testing import reseal
 
 from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
 from main_bench.leaderboard.html import html_escape
@@ -29,6 +30,7 @@ def test_hostile_text_is_escaped_in_every_field(tmp_path, episodes_dir):  # noqa
         summary.setdefault(group, {})[key] = value
     summary["submission"]["links"] = LINKS
     (run / "summary.json").write_text(json.dumps(summary))
+    reseal(run)
     report = build_leaderboard([run], tmp_path / "board",
                                LeaderboardSettings(plots=False, tables=TableSettings(n_resamples=100)))
     page, readme = report.index_html.read_text(), report.readme_md.read_text()

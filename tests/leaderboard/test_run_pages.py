@@ -13,6 +13,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 from lb_fixtures import make_results
+from mb_testing import reseal
 from PIL import Image
 
 from main_bench.leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
@@ -30,6 +31,7 @@ def with_settings(results: Path, **settings) -> Path:
                        "split": "val", "tasks": None, "track": "egocentric", "out": str(results), "workers": 2,
                        **settings}
     (results / "summary.json").write_text(json.dumps(doc))
+    reseal(results)
     return results
 
 
