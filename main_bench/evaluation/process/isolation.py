@@ -306,6 +306,8 @@ class PolicyProcess:
         if reply.get("status") != "ready":
             self._kill()
             message = _text(reply.get("message") or "", 400)
+            if self._copy is not None:
+                message = self._copy.shown(message)
             if not message.startswith("policy spec"):
                 message = f"policy spec {self.spec}: loading raised {_text(reply.get('type', 'an error'))}" + (
                     f": {message}" if message else "")

@@ -48,16 +48,20 @@ class PrivateCopy:
         self._temp = Path(tempfile.mkdtemp(prefix=f"{COPY_PREFIX}{os.getpid()}-"))
         self.folder: Path | None = self._temp / "submission"
         self.sys_path: tuple[str, ...] = ()
+        #: The folder the copy at `SUBMISSION_MOUNT` stands for, to name the user's own paths in messages.
+        self.source: Path | None = None
         skip = {Path(h).resolve() for h in hidden}
         try:
             if spec.kind == "directory" and spec.root is not None:
                 _copy_tree(spec.root, self.folder, skip)
+                self.source = Path(spec.root)
                 name = Path(spec.target).relative_to(spec.root)
                 self.inside = PolicySpec("directory", str(SUBMISSION_MOUNT / name), spec.attr, SUBMISSION_MOUNT)
             elif spec.kind == "file":
                 self.folder.mkdir()
                 source = Path(spec.target)
                 shutil.copyfile(source, self.folder / source.name)
+                self.source = source.parent
                 self.inside = PolicySpec("file", str(SUBMISSION_MOUNT / source.name), spec.attr, SUBMISSION_MOUNT)
             elif module_file is not None and not any(_inside(module_file.resolve(), d) for d in installation_dirs()):
                 self.folder.mkdir()
@@ -67,12 +71,19 @@ class PrivateCopy:
                     shutil.copyfile(module_file, self.folder / module_file.name)
                 self.inside = spec
                 self.sys_path = (str(SUBMISSION_MOUNT),)
+                self.source = module_file.parent
             else:
                 self.folder = None
                 self.inside = spec
         except BaseException:
             self.remove()
             raise
+
+    def shown(self, text: str) -> str:
+        """`text` (a message from inside the sandbox) with paths under `SUBMISSION_MOUNT` given as the user's."""
+        if self.source is None:
+            return text
+        return text.replace(f"{SUBMISSION_MOUNT}/", f"{self.source}/").replace(f"{SUBMISSION_MOUNT}:", f"{self.source}:")
 
     def remove(self) -> None:
         """Delete the copy (idempotent)."""
