@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 from urllib.parse import urlsplit
 
+import pytest
 from ch_server import SLOW_AGENT, Server, add_team, make_challenge, policy_folder
 
 from main_bench.challenge.client import pack
@@ -39,6 +40,7 @@ def _wait(predicate, what: str, timeout: float = 300.0) -> None:
     raise AssertionError(f"timed out waiting for {what}")
 
 
+@pytest.mark.slow
 def test_sigkill_loses_and_duplicates_nothing(tmp_path, ch_dataset):
     dataset, cache = ch_dataset
     root = tmp_path / "challenge"

@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from main_bench.benchmarks.compiles import kernels
 
 
@@ -36,6 +38,7 @@ def _files(folder: Path) -> dict[str, int]:
     return {str(p.relative_to(folder)): p.stat().st_size for p in folder.rglob("*") if p.is_file()}
 
 
+@pytest.mark.slow
 def test_second_process_compiles_nothing(tmp_path):
     cache = tmp_path / "numba"
     first = _run(cache)
