@@ -35,6 +35,13 @@ def portable_path(path: str | Path, root: str | Path) -> str:
     return ELIDED + (resolved.name or text.strip("/"))
 
 
+def as_given(path: str | Path) -> str:
+    """A path as a run records it: a relative one as the user gave it (normalised, relative to the working
+    directory, so results made from a repository name no machine's layout), an absolute one resolved."""
+    text = os.fspath(path)
+    return str(Path(text).resolve()) if os.path.isabs(text) else os.path.normpath(text)
+
+
 def _quote(word: str) -> str:
     return shlex.quote(word) if not word or any(c in word for c in _SPECIAL) else word
 

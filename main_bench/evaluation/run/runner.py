@@ -19,6 +19,7 @@ from typing import Any, Protocol
 from ... import __version__
 from ...errors import DatasetError, ResultsError, SubmissionError
 from ...io import atomic_write_json, folder_lock, read_json
+from ...portable import as_given
 from ...task_rules import rules_json
 from ..baselines import privileged_baseline
 from ..output.ledger import (
@@ -280,7 +281,7 @@ def write_summary(settings: EvalSettings, manifest: Any, chunks: list[Chunk]) ->
     meta = {
         "toolkit_version": __version__,
         "submission": {**settings.submission.to_json(), "spec": settings.agent},
-        "dataset": {"path": str(Path(settings.episodes).resolve()), "manifest_hash": manifest.manifest_hash},
+        "dataset": {"path": as_given(settings.episodes), "manifest_hash": manifest.manifest_hash},
         "settings": settings.to_json(),
         "task_rules": rules_json(manifest),
     }

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InputError
+from ...portable import as_given
 from ..policy.protocol import DEFAULT_MESSAGE_FLOATS, MODES, TRACKS
 
 #: Version of the rule that cuts a track into chunks (`chunks.make_chunks`): part of a run's identity, so a
@@ -147,7 +148,7 @@ class EvalSettings:
         """What makes two runs the same evaluation (compared on resume, with the data set's manifest hash);
         workers and executor excluded: they do not change the results."""
         return {
-            "episodes": str(Path(self.episodes).resolve()),
+            "episodes": as_given(self.episodes),
             "split": self.split,
             "agent": self.agent,
             "tasks": None if self.tasks is None else list(self.tasks),
