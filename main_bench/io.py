@@ -170,17 +170,23 @@ def read_through_cache(entry: Path, read: Callable[[Path], T | None], make: Call
     return value
 
 
-def refuse_output_over_inputs(out: str | Path, inputs: dict[str, str | Path | None], flag: str = "--out") -> None:
+def refuse_output_over_inputs(out: str | Path, inputs: dict[str, str | Path | None], flag: str = "--out",
+                              writes: tuple[str, ...] | None = None) -> None:
     """Refuse an output path that would overwrite an input: the same path or file (a link, a hard link), or a
     folder holding an input. `inputs`: each input's option or argument name -> its path (None, or a path that
-    does not exist, is skipped). Raises `InputError` naming the output and the input."""
+    does not exist, is skipped). `writes`: for an output folder into which the command writes only these names
+    (a report beside its results folders), a folder holding an input is refused only when the input is one of
+    them or lies under one. Raises `InputError` naming the output and the input."""
     target = Path(os.path.realpath(out))
     for name, given in inputs.items():
         if given is None or not os.path.lexists(given):
             continue
         source = Path(os.path.realpath(given))
         same = source == target or _same_file(target, source)
-        if same or target in source.parents:
+        held = target in source.parents
+        if held and writes is not None:
+            held = source.relative_to(target).parts[0] in writes
+        if same or held:
             how = "is" if same else "holds"
             raise InputError(f"{how} the input {name} ({given}); writing there would destroy it: give {flag} "
                              "another path", path=out)

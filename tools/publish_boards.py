@@ -19,6 +19,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from main_bench.leaderboard.build import REPORT_ITEMS
+
 REPO = Path(__file__).resolve().parent.parent
 SAMPLE = "episodes/sample"
 IPPO = "leaderboard/submissions/ippo-small"
@@ -60,7 +62,7 @@ def _cli(*args: str) -> None:
 def publish(board: Path, runs: list[tuple[str, list[str]]], backup: Path) -> None:
     """Evaluate `runs` into `board/results/` and build `board`'s report from them; the board's previous files
     are moved to `backup` first and put back if any command fails."""
-    items = ["results", "README.md", "index.html", "leaderboard.json", "plots"]
+    items = ["results", *REPORT_ITEMS]
     backup.mkdir(parents=True)
     for item in items:
         if (board / item).exists():

@@ -34,8 +34,9 @@ def build(
 ) -> None:
     """Rank submissions per track (split x task x agents) by team SPL, with 95% bootstrap intervals."""
     from ..leaderboard import LeaderboardSettings, TableSettings, build_leaderboard
+    from ..leaderboard.build import REPORT_ITEMS
 
-    refuse_output_over_inputs(out, {f"RESULTS {r}": r for r in results})
+    refuse_output_over_inputs(out, {f"RESULTS {r}": r for r in results}, writes=REPORT_ITEMS)
     settings = LeaderboardSettings(allow_mixed=allow_mixed, plots=plots, pictures=pictures,
                                    tables=TableSettings(seed=seed, n_resamples=resamples))
     report = build_leaderboard(list(results), out, settings)

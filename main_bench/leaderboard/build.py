@@ -18,6 +18,8 @@ from .report import LeaderboardReport, Section
 from .submissions import LoadedSubmission, group_by_dataset, load_submission
 from .tables import TableSettings, build_tables
 
+#: What `build_leaderboard` writes into its output folder (and nothing else there).
+REPORT_ITEMS = ("README.md", "index.html", "leaderboard.json", "plots", "runs")
 
 @dataclass(frozen=True)
 class LeaderboardSettings:

@@ -89,7 +89,8 @@ def _variants() -> list:
     """Each command with the output as the input itself, a symbolic link to it, a hard link (files only) and the
     folder holding it."""
     return [pytest.param(command, variant, id=f"{command}-{variant}") for command, (_, kind, _) in {**CASES, **MORE}.items()
-            for variant in ("same", "symlink", "hardlink", "parent") if not (variant == "hardlink" and kind == "dir")]
+            for variant in ("same", "symlink", "hardlink", "parent") if not (variant == "hardlink" and kind == "dir")
+            and not (variant == "parent" and command.startswith("leaderboard build"))]
 
 
 @pytest.mark.parametrize(("command", "variant"), _variants())
@@ -110,6 +111,20 @@ def test_output_over_an_input_is_refused(cli, tmp_path, monkeypatch, command, va
     assert len(lines) == 1 and "Traceback" not in res.err, res.err
     assert str(out) in lines[0] and "destroy" in lines[0], lines[0]
     assert _snapshot(source) == before
+
+
+def test_a_report_folder_may_hold_its_results_but_not_where_it_writes(cli, tmp_path):
+    """`leaderboard build R/results/x --out R` (the published board's layout) writes only its report files into R;
+    a results folder at one of those names would be overwritten and is refused."""
+    board = tmp_path / "board"
+    for name in ("results", "plots"):
+        source = _make_input(board / name, "dir", "results")
+        res = cli("leaderboard", "build", str(source), "--out", str(board))
+        lines = res.err.strip().splitlines()
+        if name == "plots":
+            assert res.code == 2 and len(lines) == 1 and "destroy" in lines[0], res.err
+        else:
+            assert "destroy" not in res.err, res.err
 
 
 def test_an_output_beside_the_input_is_accepted(tmp_path):
