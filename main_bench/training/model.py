@@ -17,6 +17,7 @@ no gradient flows from a receiver back into its sender.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -200,8 +201,10 @@ def to_tensors(depth: np.ndarray, rgb: np.ndarray | None, vec: np.ndarray, devic
 class TrainedAgent:
     """One agent of a trained team as an `AgentPolicy`: `act(observation, inbox) -> (action, message)`.
 
-    Actions are sampled from the policy's distribution with a generator seeded from the episode seed, so an
-    evaluation is deterministic for its seed. Sends its message in `comm` mode (cut to the channel's size).
+    Actions are sampled from the policy's distribution with a generator seeded from the run's policy seed and
+    the episode's first observation (the evaluator hands every episode the same seed, so that no seed names an
+    episode): deterministic for a run's seed, different draws in different episodes. Sends its message in
+    `comm` mode (cut to the channel's size).
     """
 
     def __init__(self, net: Net, seed: int = 0) -> None:
@@ -212,8 +215,8 @@ class TrainedAgent:
 
     def reset(self, info: Any) -> None:
         """New episode: clear the memory and reseed the sampler."""
-        episode_seed = 0 if info is None else int(info.seed)
-        self._gen = torch.Generator().manual_seed((self.seed * 1_000_003 + episode_seed) % (2**63))
+        self._run_seed = (self.seed * 1_000_003 + (0 if info is None else int(info.seed))) % (2**63)
+        self._gen: torch.Generator | None = None
         self._hidden = torch.zeros(1, self.net.config.hidden)
         self._floats = 0 if info is None else min(self.net.config.message_floats, int(info.message_floats))
 
@@ -222,6 +225,10 @@ class TrainedAgent:
         """Sample an action (and, comm variants, the message to send)."""
         cfg = self.net.config
         depth, rgb, vec = pack_observation(observation, cfg.use_rgb)
+        if self._gen is None:  # first step: the episode's draws follow from what it shows
+            first = hashlib.sha256(np.ascontiguousarray(depth).tobytes() + np.ascontiguousarray(vec).tobytes())
+            mixed = (self._run_seed ^ int.from_bytes(first.digest()[:8], "little")) % (2**63)
+            self._gen = torch.Generator().manual_seed(mixed)
         d, r, v = to_tensors(depth[None], None if rgb is None else rgb[None], vec[None])
         messages = lengths = None
         if cfg.comm:
