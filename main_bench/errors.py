@@ -62,3 +62,10 @@ class ChallengeError(InputError):
     def __init__(self, message: str, *, status: int = 400, path: str | Path | None = None) -> None:
         self.status = status
         super().__init__(message, path=path)
+
+
+def clipped(value: object, limit: int = 80) -> str:
+    """An offending value as an error message shows it: the text itself (or its repr), cut to `limit`
+    characters with "..." so that a hostile or huge value cannot flood a message."""
+    text = value if isinstance(value, str) else repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."

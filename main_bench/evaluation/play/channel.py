@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ...errors import clipped
 from ..policy.protocol import MESSAGE_VALUE_BYTES
 
 #: The longest message a policy process describes value by value; longer ones are reported by length only.
@@ -160,21 +161,16 @@ def _described_values(sender: str, described: dict[str, Any]) -> np.ndarray:
 def _marker_fields(marker: Any) -> dict[str, str]:
     """A `_marker` from the policy's side as short text fields, whatever was sent."""
     fields = marker if isinstance(marker, dict) else {"repr": marker}
-    out = {"type": _clip(fields.get("type", "?")), "repr": _clip(fields.get("repr", "?"))}
+    out = {"type": clipped(fields.get("type", "?")), "repr": clipped(fields.get("repr", "?"))}
     if "dtype" in fields:
-        out["dtype"] = _clip(fields["dtype"])
+        out["dtype"] = clipped(fields["dtype"])
         shape = fields.get("shape")
-        out["shape"] = _clip(tuple(shape) if isinstance(shape, list) else shape)
+        out["shape"] = clipped(tuple(shape) if isinstance(shape, list) else shape)
     return out
 
 
-def _clip(value: Any) -> str:
-    text = value if isinstance(value, str) else repr(value)
-    return text if len(text) <= 80 else text[:77] + "..."
-
-
 def _shown(value: Any) -> str:
-    return f"{_clip(value)} ({type(value).__name__})"
+    return f"{clipped(value)} ({type(value).__name__})"
 
 
 def _recipient(sender: str, to: Any, ids: tuple[str, ...]) -> int:
@@ -183,7 +179,7 @@ def _recipient(sender: str, to: Any, ids: tuple[str, ...]) -> int:
     index = ids.index(to) if isinstance(to, str) and to in ids else (
         to if isinstance(to, int) and not isinstance(to, bool) else None)
     if index is None or not 0 <= index < len(ids):
-        shown = repr(_clip(to)) if isinstance(to, str) else _clip(to)
+        shown = repr(clipped(to)) if isinstance(to, str) else clipped(to)
         raise MessageError(f"invalid_message: {sender} addressed {shown}, which is not in the team "
                            f"({', '.join(ids)})")
     return int(index)

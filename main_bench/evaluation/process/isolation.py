@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InputError, MainBenchError, SubmissionError
+from ...errors import clipped as _text
 from ..policy.submission import PolicySpec, ProtocolError
 from .ipc import encode_request, recv_reply, send_parts
 from .policy_child import EXIT_OUT_OF_MEMORY, TORCH_DEVICE_VAR
@@ -431,11 +432,6 @@ def _policy_exception(reply: dict[str, Any], op: str, memory_mb: int, stop: bool
         return PolicyError(f"memory: {name} in {op}{where} (limit {memory_mb} MB)", details, stop=True)
     text = f"{name}: {message}" if message else name
     return PolicyError(f"exception: {text}{where}", details, stop=stop)
-
-
-def _text(value: Any, limit: int = 80) -> str:
-    text = value if isinstance(value, str) else repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def validate_actions(reply: dict[str, Any], acting: Any) -> dict[str, int]:
