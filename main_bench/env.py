@@ -89,7 +89,8 @@ class MainParallelEnv(ParallelEnv):
                  task: str | None = None, goal: str | None = None, track: str = "egocentric",
                  renderer: str = "auto", image_size: int | None = None, reward: RewardSettings | None = None,
                  max_steps: int | None = None, cache_dir: str | Path | None = None, seed: int = 0,
-                 render_mode: str | None = None, message_floats: int = 0) -> None:
+                 render_mode: str | None = None, message_floats: int = 0,
+                 share_with: MainParallelEnv | None = None) -> None:
         from dataclasses import replace
 
         from .episodes.dataset import load_episodes, read_manifest
@@ -152,8 +153,13 @@ class MainParallelEnv(ParallelEnv):
                                 for a, space in self._obs_spaces.items()}
             self._act_spaces = {a: message_action_space(n, message_floats) for a in self.possible_agents}
         self._channel: Any = None
-        self._resources = EpisodeResources(self.manifest, sim_settings, None if cache_dir is None else Path(cache_dir),
-                                           seed)
+        if share_with is not None:  # the same data set and camera: reuse its scenes, navmeshes and fields
+            if share_with.manifest.root != self.manifest.root or share_with.sim_settings != sim_settings:
+                raise InputError("share_with must be an env of the same data set, renderer and image size")
+            self._resources = share_with._resources.sibling(seed)
+        else:
+            self._resources = EpisodeResources(self.manifest, sim_settings,
+                                               None if cache_dir is None else Path(cache_dir), seed)
         self._rng = np.random.default_rng(seed)
         self._episode: Any = None
         self._last_rgb: np.ndarray | None = None
@@ -172,6 +178,12 @@ class MainParallelEnv(ParallelEnv):
 
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
         """Start an episode: `options["episode_id"]`, else one drawn from the generator (reseeded by `seed`)."""
+        infos = self.reset_state(seed, options)
+        return self.observations(*self._sim.observe()), infos
+
+    def reset_state(self, seed: int | None = None, options: dict | None = None) -> dict:
+        """`reset` without the observations: the infos. A batch simulator (`vector.batch`) then renders the
+        agents' views (`view_poses`) together with other environments' and calls `observations`."""
         from .evaluation.play.episode_loop import LoopSettings
         from .sim.from_manifest import rules_from_manifest
         from .sim.task import EpisodeJudge, TaskRules
@@ -201,13 +213,17 @@ class MainParallelEnv(ParallelEnv):
         self._distances = measure_distances(self._fields, self._sim.positions, None)
         self.agents = list(self.possible_agents)
         self._channel = self._new_channel()
-        observations = self._observe(np.ones(episode.num_agents, dtype=bool))
-        infos = {a: self._info(i, False) for i, a in enumerate(self.possible_agents)}
-        return observations, infos
+        self._acting = np.ones(episode.num_agents, dtype=bool)
+        return {a: self._info(i, False) for i, a in enumerate(self.possible_agents)}
 
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
         """One step of every live agent; returns observations, rewards, terminations, truncations, infos for
         the agents that were live before the step."""
+        rewards, terminations, truncations, infos = self.step_state(actions)
+        return self.observations(*self._sim.observe()), rewards, terminations, truncations, infos
+
+    def step_state(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict]:
+        """`step` without the observations: rewards, terminations, truncations, infos (see `reset_state`)."""
         if not self.agents:
             raise InputError("step called with no live agents; call reset() first")
         live = [a for a in self.possible_agents if a in self.agents]
@@ -242,9 +258,9 @@ class MainParallelEnv(ParallelEnv):
             terminations[a] = called or (over and ended_on_call and not timed_out)
             truncations[a] = not terminations[a] and (timed_out or over)
             infos[a] = self._info(i, over)
-        observations = self._observe(acting)
+        self._acting = acting
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
-        return observations, rewards, terminations, truncations, infos
+        return rewards, terminations, truncations, infos
 
     def _new_channel(self) -> Any:
         if not self.message_floats:
@@ -287,12 +303,18 @@ class MainParallelEnv(ParallelEnv):
             out[self.possible_agents[i]] = float(r)
         return out
 
-    def _observe(self, which: np.ndarray) -> dict[str, dict[str, Any]]:
-        rgb, depth = self._sim.observe()
+    def view_poses(self) -> tuple[Any, np.ndarray, np.ndarray]:
+        """What to render for the next observations: (the episode's `Scene`, feet (N, 3) metres, yaws (N,)
+        radians), every agent of the team (one that has left still stands in the scene)."""
+        return self._sim.scene, self._sim.positions, self._sim.yaws
+
+    def observations(self, rgb: np.ndarray, depth: np.ndarray) -> dict[str, dict[str, Any]]:
+        """The observations of the agents that acted on the last step (all after a reset), from every agent's
+        view as `Renderer.render` gives them: rgb (N, H, W, 3) uint8, depth (N, H, W, 1) float32 metres."""
         self._last_rgb = rgb
         positions, yaws = self._sim.positions, self._sim.yaws
-        out = build_observations(self._episode, self._loop, which, rgb, depth, positions, yaws, self._collided,
-                                 self._targets)
+        out = build_observations(self._episode, self._loop, self._acting, rgb, depth, positions, yaws,
+                                 self._collided, self._targets)
         if self._channel is not None:
             for a, obs in out.items():
                 obs["inbox"] = self._channel.inbox(self.possible_agents.index(a))

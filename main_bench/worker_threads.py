@@ -15,13 +15,18 @@ from contextlib import contextmanager
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
+#: Mesa llvmpipe's rasteriser threads (one per core by default), read when a GL context is made.
+RENDER_THREAD_VARIABLES = ("LP_NUM_THREADS",)
+
+
 @contextmanager
-def single_threaded_children() -> Iterator[None]:
-    """Within the block, processes started (spawned or forkserver-forked) load their math libraries with one
-    thread each; a variable the user set is kept. The parent's environment is restored on exit. A child forked
+def single_threaded_children(extra: tuple[str, ...] = ()) -> Iterator[None]:
+    """Within the block, processes started (spawned or forkserver-forked) load their math libraries (and the
+    variables `extra` names, e.g. `RENDER_THREAD_VARIABLES`) with one thread each; a variable the user set is
+    kept. The parent's environment is restored on exit. A child forked
     from this process keeps the libraries as this process loaded them (measured on `evaluate --workers 2` with
     forked workers: 9.1 to 9.5 s with or without `OPENBLAS_NUM_THREADS=1` for the whole command)."""
-    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    saved = {name: os.environ.get(name) for name in (*THREAD_VARIABLES, *extra)}
     for name, value in saved.items():
         if value is None:
             os.environ[name] = "1"

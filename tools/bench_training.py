@@ -7,4 +7,4 @@ from main_bench.benchmarks import tool_main
 from main_bench.benchmarks.training import run, summary_lines
 
 if __name__ == "__main__":
-    tool_main(__doc__, "B = 1 and 4, one repeat, two updates", run, lambda result: "\n".join(summary_lines(result)))
+    tool_main(__doc__, "two updates, five renderer calls", run, lambda result: "\n".join(summary_lines(result)))

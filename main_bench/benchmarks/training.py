@@ -1,19 +1,21 @@
-"""Training speed: vectorised sampling against the simulator alone, training throughput with its time split,
-and the memory of a rollout.
+"""Training speed: the trainer's agent-steps per second with its time split, the batch renderer alone, and the
+memory of a rollout.
 
-- Sampling (64 x 64 RGB-D, 2 agents, the committed sample's train split, object goals, gps track): agent-steps/s
-  of the process sampler (B sub-environments in 2 worker processes, shared memory) against the simulator alone
-  (the same B sub-environments' `SubEnv` code stepped one after another in this process: no workers, no shared
-  memory), measured side by side, interleaved per repeat; B = 1, 2, 4, 8; goal at B = 4: at least 85%.
-  Random moves (no `found`), so episodes run their course.
-- Training (64 x 64 depth, 2 agents, IPPO, the small model, B = 8, 64-step rollouts, 2 PPO epochs, the
-  trainer's torch on 2 threads: the shipped run's settings):
-  agent-steps/s of `Trainer`'s loop (sampling, forward, updates; not start-up) with the process sampler
-  (goal: 500), and the time split of a second run with the in-process sampler whose simulators are
-  timed: render (`observe`), physics (`step`), the rest of the env (rules, distances, packing), policy
-  forward, PPO update, as shares of the training loop (start-up and writing are reported apart).
+- Training, the shipped small configuration (IPPO, 64 x 64 depth, 2 agents, gps track, point goals on the
+  point-goal copy of the committed sample, B = 8 sub-environments in 2 sampler workers, 64-step rollouts,
+  2 PPO epochs, the trainer's torch on 2 threads): agent-steps/s *steady* (from the end of the first update to
+  the end of the last: sampling, forward passes and PPO updates, no start-up) and *overall* (the run's wall time
+  from `Trainer.run()` on, start-up included). Goal on the 2-core machine: 1,000 steady.
+- Time split, from a second run with the in-process sampler whose simulator steps and batch renders are timed:
+  render (`BatchRenderer.render`), physics (`Simulator.step`), the rest of the env (rules, distances, packing),
+  policy forward, PPO update, as shares of the training loop.
+- The batch renderer alone: frames (agent views) per second of one `BatchRenderer.render` call for B teams of 2
+  in the sample's train scenes, depth only, 64 x 64 (the training configuration's call).
 - Memory of one rollout at B = 8, N = 3, 256 steps, 64 x 64 RGB-D (`training.storage.StorageShape`), with
   depth as uint16 millimetres and, for comparison, as float32.
+
+The point-goal copy is made once (`training.pointgoals`, about 1.5 minutes on the 2-core machine) into the
+cache (`cache_root()/bench/sample-points`) and reused.
 """
 
 from __future__ import annotations
@@ -29,134 +31,131 @@ import numpy as np
 from . import machine_done, machine_info
 from .modes import sample_dataset
 
-GOAL_SAMPLING_RATIO = 0.85
-GOAL_TRAINING_RATE = 500.0
+GOAL_TRAINING_RATE = 1000.0
 
-
-#: The training measurement's configuration: the shipped IPPO run's (B = 8, the trainer on both cores).
+#: The training measurement's configuration: the shipped run's (B = 8, 2 workers, the trainer on both cores).
 TRAIN_ENVS = 8
 TRAIN_THREADS = 2
 
 
-def _spec(envs: int, use_rgb: bool = True) -> Any:
-    from ..vector.layout import VecSpec
+def point_goal_sample() -> Path:
+    """The point-goal copy of the committed sample, made once into the cache."""
+    from ..cache_root import cache_root
+    from ..training.pointgoals import point_goal_dataset
 
-    return VecSpec(episodes=str(sample_dataset()), split="train", agents=2, num_envs=envs, goal="object",
-                   track="gps", image_size=64, use_rgb=use_rgb, seed=0)
-
-
-def _rate(sampler: Any, steps: int, seed: int = 0) -> float:
-    rng = np.random.default_rng(seed)
-    arrays = sampler.reset()
-    started = time.perf_counter()
-    agent_steps = 0
-    for _ in range(steps):
-        arrays["actions"][:] = rng.integers(1, 4, size=arrays["actions"].shape)
-        agent_steps += int(arrays["alive"].sum())
-        arrays = sampler.step()
-    return agent_steps / (time.perf_counter() - started)
-
-
-def sampling(sizes: tuple[int, ...], steps: int, repeats: int) -> dict[str, Any]:
-    """Vectorised against simulator-only agent-steps/s per B (medians over interleaved repeats)."""
-    from ..vector.sampler import make_sampler
-
-    out = {}
-    for b in sizes:
-        pairs = []
-        inline = make_sampler(_spec(b), "inline")
-        process = make_sampler(_spec(b), "process", workers=2)
-        try:
-            _rate(inline, 5)
-            _rate(process, 5)
-            for r in range(repeats):
-                pairs.append((_rate(inline, steps, r), _rate(process, steps, r)))
-        finally:
-            inline.close()
-            process.close()
-        out[str(b)] = {"simulator_only": round(statistics.median(p[0] for p in pairs), 1),
-                       "vectorised": round(statistics.median(p[1] for p in pairs), 1),
-                       "ratio": round(statistics.median(p[1] / p[0] for p in pairs), 3)}
+    out = cache_root() / "bench" / "sample-points"
+    if not (out / "manifest.json").is_file():
+        point_goal_dataset(sample_dataset(), out, overwrite=True)
     return out
 
 
-class _Timed:
-    """Wraps a simulator: time spent in `step` (physics) and `observe` (render)."""
-
-    def __init__(self, sim: Any, totals: dict[str, float]) -> None:
-        self._sim, self._totals = sim, totals
-
-    def step(self, *args: Any, **kwargs: Any) -> Any:
-        t0 = time.perf_counter()
-        try:
-            return self._sim.step(*args, **kwargs)
-        finally:
-            self._totals["physics"] += time.perf_counter() - t0
-
-    def observe(self, *args: Any, **kwargs: Any) -> Any:
-        t0 = time.perf_counter()
-        try:
-            return self._sim.observe(*args, **kwargs)
-        finally:
-            self._totals["render"] += time.perf_counter() - t0
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._sim, name)
-
-
-def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int = TRAIN_THREADS) -> dict[str, Any]:
-    """Trainer throughput (process sampler) and its time split (in-process sampler, timed simulators), with
-    `envs` sub-environments and `threads` torch threads in the trainer."""
-    import torch
-
+def shipped_settings(updates: int, envs: int = TRAIN_ENVS, backend: str = "process", workers: int = 2,
+                     episodes: Path | None = None) -> Any:
+    """The `TrainSettings` of the measurement (see the module docstring)."""
     from ..training.ppo import PPOSettings
     from ..training.settings import TrainSettings
+
+    return TrainSettings(episodes=str(episodes or point_goal_sample()), algo="ippo", goal="point", track="gps",
+                         image_size=64, num_envs=envs, workers=workers, backend=backend, rollout=64,
+                         updates=updates, checkpoint_every=10_000, ppo=PPOSettings(epochs=2))
+
+
+def _rates(trainer: Any, started: float) -> tuple[float, float, Any]:
+    summary = trainer.run()
+    wall = time.perf_counter() - started
+    rows = trainer.curve
+    steady = float("nan")
+    if len(rows) >= 2:
+        steady = (rows[-1]["agent_steps"] - rows[0]["agent_steps"]) / max(
+            rows[-1]["wall_seconds"] - rows[0]["wall_seconds"], 1e-9)
+    return steady, summary.agent_steps / wall, summary
+
+
+def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int = TRAIN_THREADS,
+             episodes: Path | None = None) -> dict[str, Any]:
+    """Trainer throughput (process sampler, steady and overall) and its time split (in-process sampler, timed
+    simulator steps and renders), with `envs` sub-environments and `threads` torch threads in the trainer."""
+    import torch
+
+    from ..sim.render.batch import BatchRenderer
+    from ..sim.simulator import Simulator
     from ..training.trainer import Trainer
 
     torch.set_num_threads(threads)
-    base = dict(episodes=str(sample_dataset()), algo="ippo", goal="object", track="gps", image_size=64,
-                num_envs=envs, rollout=64, updates=updates, checkpoint_every=10_000, ppo=PPOSettings(epochs=2))
-    fast = Trainer(TrainSettings(**base, backend="process", workers=2), workdir / "process").run()
-    rate = fast.agent_steps / sum(fast.timing.values())  # the training loop: sampling, forward, updates
+    episodes = episodes or point_goal_sample()
+    started = time.perf_counter()
+    fast = Trainer(shipped_settings(updates, envs, episodes=episodes), workdir / "process")
+    steady, overall, _ = _rates(fast, started)
 
     totals = {"render": 0.0, "physics": 0.0}
-    trainer = Trainer(TrainSettings(**base, backend="inline", workers=0), workdir / "inline")
-    import main_bench.evaluation.run.resources as resources
+    originals = {"render": BatchRenderer.render, "physics": Simulator.step}
 
-    original = resources.EpisodeResources.simulator
+    def timed(key: str) -> Any:
+        def call(self: Any, *args: Any, **kwargs: Any) -> Any:
+            t0 = time.perf_counter()
+            try:
+                return originals[key](self, *args, **kwargs)
+            finally:
+                totals[key] += time.perf_counter() - t0
+        return call
 
-    def timed(self: Any, scene_id: str) -> Any:
-        return _Timed(original(self, scene_id), totals)
-
-    from ..vector.sampler import InlineSampler
-
-    first_reset = InlineSampler.reset
-
-    def reset_then_count(self: Any) -> Any:
-        arrays = first_reset(self)
-        totals.update(render=0.0, physics=0.0)  # count the training loop only, not the start-up
-        return arrays
-
-    resources.EpisodeResources.simulator = timed  # type: ignore[method-assign]
-    InlineSampler.reset = reset_then_count  # type: ignore[method-assign]
+    trainer = Trainer(shipped_settings(updates, envs, backend="inline", workers=0, episodes=episodes),
+                      workdir / "inline")
+    BatchRenderer.render, Simulator.step = timed("render"), timed("physics")  # type: ignore[method-assign]
     try:
         started = time.perf_counter()
         split = trainer.run()
         total = time.perf_counter() - started
     finally:
-        resources.EpisodeResources.simulator = original  # type: ignore[method-assign]
-        InlineSampler.reset = first_reset  # type: ignore[method-assign]
-    env_rest = split.timing["sample"] - totals["render"] - totals["physics"]
-    seconds = {"render": totals["render"], "physics": totals["physics"], "env_other": env_rest,
+        BatchRenderer.render, Simulator.step = originals["render"], originals["physics"]  # type: ignore[method-assign]
+    loop = sum(split.timing.values())
+    seconds = {"render": totals["render"], "physics": totals["physics"],
+               "env_other": split.timing["sample"] - totals["render"] - totals["physics"],
                "policy_forward": split.timing["forward"], "update": split.timing["update"]}
-    loop = sum(seconds.values())
     seconds["startup_and_writing"] = total - loop
-    return {"agent_steps_per_s": round(rate, 1), "agent_steps": fast.agent_steps, "updates": updates,
-            "envs": envs, "torch_threads": threads,
-            "inline_agent_steps_per_s": round(split.agent_steps / loop, 1),
+    return {"agent_steps_per_s": round(steady, 1), "agent_steps_per_s_overall": round(overall, 1),
+            "agent_steps": fast.agent_steps, "updates": updates, "envs": envs, "workers": 2,
+            "torch_threads": threads, "inline_agent_steps_per_s": round(split.agent_steps / loop, 1),
             "time_split_seconds": {k: round(v, 2) for k, v in seconds.items()},
             "time_split_share_of_loop": {k: round(v / loop, 3) for k, v in seconds.items()
                                          if k != "startup_and_writing"}}
+
+
+def batch_renderer(teams: int = TRAIN_ENVS, calls: int = 30, episodes: Path | None = None) -> dict[str, Any]:
+    """Frames (views) per second of one `BatchRenderer` call for `teams` teams of 2 at their episodes' starts
+    in the train split's scenes: depth only and RGB-D, 64 x 64 (medians over `calls` calls)."""
+    from dataclasses import replace
+
+    from ..episodes.dataset import load_episodes, read_manifest
+    from ..evaluation.run.resources import EpisodeResources
+    from ..sim.from_manifest import sim_settings_from_manifest
+    from ..sim.render.batch import BatchRenderer
+
+    data = episodes or sample_dataset()
+    manifest = read_manifest(data)
+    settings = sim_settings_from_manifest(manifest, "auto")
+    camera = replace(settings.camera, width=64, height=64)
+    pool = load_episodes(data, "train", None, 2)[:teams]
+    resources = EpisodeResources(manifest, settings)
+    team_list = [(resources.scene(e.scene_id)[0], np.asarray(e.start_positions), np.asarray(e.start_yaws))
+                 for e in pool]
+    renderer = BatchRenderer(camera, "auto", agent_radius=settings.agent_radius,
+                             agent_height=settings.agent_height)
+    out: dict[str, Any] = {"teams": len(team_list), "views_per_call": 2 * len(team_list), "image_size": 64}
+    try:
+        for name, rgb in (("depth", False), ("rgbd", True)):
+            renderer.render(team_list, rgb=rgb)
+            times = []
+            for _ in range(calls):
+                t0 = time.perf_counter()
+                renderer.render(team_list, rgb=rgb)
+                times.append(time.perf_counter() - t0)
+            out[f"{name}_frames_per_s"] = round(out["views_per_call"] / statistics.median(times), 1)
+        out["renderer"] = f"{renderer.name} on {renderer.device}"
+    finally:
+        renderer.close()
+        resources.close()
+    return out
 
 
 def rollout_memory() -> dict[str, Any]:
@@ -174,17 +173,13 @@ def rollout_memory() -> dict[str, Any]:
 def run(quick: bool = False) -> dict[str, Any]:
     """Every measurement of this module (see its docstring); a JSON-ready dict."""
     machine = machine_info()
-    sizes = (1, 4) if quick else (1, 2, 4, 8)
-    steps, repeats, updates = (20, 1, 2) if quick else (60, 3, 4)
+    updates = 2 if quick else 8
     out: dict[str, Any] = {"benchmark": "training", "quick": quick,
-                           "goal": {"vectorised_over_simulator_at_B4": GOAL_SAMPLING_RATIO,
-                                    "training_agent_steps_per_s": GOAL_TRAINING_RATE}}
-    out["sampling"] = sampling(sizes, steps, repeats)
-    at4 = out["sampling"]["4"]["ratio"]
-    out["sampling_meets_goal_at_B4"] = at4 >= GOAL_SAMPLING_RATIO
+                           "goal": {"training_agent_steps_per_s": GOAL_TRAINING_RATE}}
     with tempfile.TemporaryDirectory() as tmp:
         out["training"] = training(updates, Path(tmp))
     out["training_meets_goal"] = out["training"]["agent_steps_per_s"] >= GOAL_TRAINING_RATE
+    out["batch_renderer"] = batch_renderer(calls=5 if quick else 30)
     out["rollout_memory"] = rollout_memory()
     out["machine"] = machine_done(machine)
     return out
@@ -193,15 +188,14 @@ def run(quick: bool = False) -> dict[str, Any]:
 def summary_lines(result: dict[str, Any]) -> list[str]:
     """The result of `run` as short text lines."""
     m = result["machine"]
-    lines = [f"{m['cpus']} CPUs; 1-min load {m['load_average_1min_at_start']} at start, "
-             f"{m['load_average_1min_at_end']} at end"]
-    for b, r in result["sampling"].items():
-        lines.append(f"B={b}: vectorised {r['vectorised']} vs simulator-only {r['simulator_only']} agent-steps/s "
-                     f"(ratio {r['ratio']})")
-    t = result["training"]
-    lines.append(f"training: {t['agent_steps_per_s']} agent-steps/s (goal {GOAL_TRAINING_RATE:.0f}); split "
-                 + ", ".join(f"{k} {v:.0%}" for k, v in t["time_split_share_of_loop"].items()))
-    r = result["rollout_memory"]
-    lines.append(f"rollout B=8 N=3 256 steps 64x64 RGB-D: {r['mib']} MiB ({r['mib_with_float32_depth']} MiB "
-                 "with float32 depth)")
-    return lines
+    t, r = result["training"], result["batch_renderer"]
+    memory = result["rollout_memory"]
+    return [f"{m['cpus']} CPUs; 1-min load {m['load_average_1min_at_start']} at start, "
+            f"{m['load_average_1min_at_end']} at end",
+            f"training: {t['agent_steps_per_s']} agent-steps/s steady (goal {GOAL_TRAINING_RATE:.0f}), "
+            f"{t['agent_steps_per_s_overall']} overall; split "
+            + ", ".join(f"{k} {v:.0%}" for k, v in t["time_split_share_of_loop"].items()),
+            f"batch renderer ({r['renderer']}, {r['views_per_call']} views per call, 64x64): "
+            f"{r['depth_frames_per_s']} frames/s depth, {r['rgbd_frames_per_s']} RGB-D",
+            f"rollout B=8 N=3 256 steps 64x64 RGB-D: {memory['mib']} MiB ({memory['mib_with_float32_depth']} MiB "
+            "with float32 depth)"]

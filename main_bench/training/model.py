@@ -83,12 +83,14 @@ class Net(nn.Module):
         self.config = config
         channels = 4 if config.use_rgb else 1
         size = config.image_size
+        # A strided first layer (8 x 8, stride 4) does most of the downsampling where the image is largest: on
+        # CPU it costs about a ninth of a 5 x 5 stride-2 stem at 64 x 64 (docs/training.md, "Speed").
         self.cnn = nn.Sequential(
-            nn.Conv2d(channels, 16, 5, stride=2, padding=2), nn.ReLU(),
-            nn.Conv2d(16, 32, 3, stride=2, padding=1), nn.ReLU(),
-            nn.Conv2d(32, 32, 3, stride=2, padding=1), nn.ReLU(),
+            nn.Conv2d(channels, 16, 8, stride=4, padding=2), nn.ReLU(),
+            nn.Conv2d(16, 32, 4, stride=2, padding=1), nn.ReLU(),
+            nn.Conv2d(32, 32, 3, stride=1, padding=1), nn.ReLU(),
             nn.AdaptiveAvgPool2d(4 if size >= 32 else 2), nn.Flatten(),
-        )
+        ).to(memory_format=torch.channels_last)
         cnn_out = 32 * (16 if size >= 32 else 4)
         self.category = nn.Embedding(NUM_CATEGORIES + 1, 16)  # row 0: point goal
         self.goal = nn.Linear(VEC - 1, 32)
@@ -117,6 +119,7 @@ class Net(nn.Module):
         goal = vec[:, :8].clone()
         goal[:, 0] = torch.log1p(goal[:, 0].clamp(min=0.0))
         goal[:, 3:6] = goal[:, 3:6] / 10.0
+        image = image.contiguous(memory_format=torch.channels_last)
         return self.fuse(torch.cat([self.cnn(image), cat, torch.relu(self.goal(goal))], dim=1))
 
     def heard(self, messages: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:

@@ -15,6 +15,7 @@ import numpy as np
 from ..vector.obs import VEC
 
 OBS_KEYS = ("depth", "rgb", "vec", "inbox", "inbox_len")
+ALL = slice(None)
 
 
 @dataclass(frozen=True)
@@ -63,21 +64,22 @@ class Rollout:
         self.shape = shape
         self.data = {name: np.zeros(s, dtype) for name, (s, dtype) in shape.fields().items()}
 
-    def put_observation(self, t: int, arrays: dict[str, np.ndarray]) -> None:
-        """Copy the sampler's current observations and masks (`alive`, `first`) into step t."""
-        for key in OBS_KEYS:
+    def put_observation(self, t: int, arrays: dict[str, np.ndarray], rows: slice = ALL) -> None:
+        """Copy the sampler's current observations and masks (`alive`, `first`) of `rows` into step t."""
+        for key in (*OBS_KEYS, "alive", "first", "in_region"):
             if key in self.data:
-                self.data[key][t] = arrays[key]
-        self.data["alive"][t] = arrays["alive"]
-        self.data["first"][t] = arrays["first"]
-        self.data["in_region"][t] = arrays["in_region"]
+                self.data[key][t, rows] = arrays[key][rows]
 
-    def put_step(self, t: int, hidden: np.ndarray, actions: np.ndarray, logp: np.ndarray, values: np.ndarray,
-                 rewards: np.ndarray, done: np.ndarray) -> None:
-        """Store what happened at step t: starting memories, actions, log-probs, values, rewards, dones."""
+    def put_action(self, t: int, rows: slice, hidden: np.ndarray, actions: np.ndarray, logp: np.ndarray,
+                   values: np.ndarray) -> None:
+        """Store the policy's side of step t for `rows`: starting memories, actions, log-probs, values."""
         d = self.data
-        d["hidden"][t], d["actions"][t], d["logp"][t], d["values"][t] = hidden, actions, logp, values
-        d["rewards"][t], d["done"][t] = rewards, done
+        d["hidden"][t, rows], d["actions"][t, rows], d["logp"][t, rows], d["values"][t, rows] = \
+            hidden, actions, logp, values
+
+    def put_outcome(self, t: int, rows: slice, rewards: np.ndarray, done: np.ndarray) -> None:
+        """Store the sampler's side of step t for `rows`: rewards and dones."""
+        self.data["rewards"][t, rows], self.data["done"][t, rows] = rewards, done
 
     def chunks(self, length: int) -> list[slice]:
         """Time slices of at most `length` steps covering the rollout (truncated BPTT)."""

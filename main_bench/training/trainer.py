@@ -29,7 +29,7 @@ from .settings import TrainSettings
 from .storage import Rollout, StorageShape
 
 CHECKPOINT = "checkpoint.pt"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2
 WINDOW = 50  # episodes in the curve's moving averages
 
 
@@ -139,6 +139,8 @@ class Trainer:
 
     def run(self) -> TrainSummary:
         """Train until `updates` or `max_minutes`; checkpoint, write curves and the submission; summary."""
+        import torch
+
         from ..vector.sampler import make_sampler
         from .submission import write_submission
 
@@ -152,13 +154,19 @@ class Trainer:
         for sig in old:
             signal.signal(sig, self._on_signal)
         tb = _tensorboard(self.run_dir)
+        update_threads = torch.get_num_threads()
+        # While a half steps in its workers, the forward of the other half shares the cores with them: one torch
+        # thread then, since threads waiting on each other stall when the cores are oversubscribed.
+        collect_threads = 1 if s.backend != "inline" else update_threads
         try:
             arrays = sampler.reset()
             hidden = np.zeros((s.num_envs, s.agents, s.hidden), dtype=np.float32)
             while self.update < s.updates and not self._stop:
                 if s.max_minutes and (time.perf_counter() - start) / 60.0 >= s.max_minutes:
                     break
+                torch.set_num_threads(collect_threads)
                 rollout, hidden, ended = self._collect(sampler, arrays, hidden, timing)
+                torch.set_num_threads(update_threads)
                 t0 = time.perf_counter()
                 loss = self._learn(rollout)
                 timing["update"] += time.perf_counter() - t0
@@ -175,6 +183,7 @@ class Trainer:
                     self.checkpoint(self.wall_before + time.perf_counter() - start)
         finally:
             sampler.close()
+            torch.set_num_threads(update_threads)
             for sig, handler in old.items():
                 signal.signal(sig, handler)
             if tb is not None:
@@ -194,56 +203,87 @@ class Trainer:
 
     def _collect(self, sampler: Any, arrays: dict[str, np.ndarray], hidden: np.ndarray,
                  timing: dict[str, float]) -> tuple[Rollout, np.ndarray, list[np.ndarray]]:
+        """One rollout. The sampler's two halves (`sampler.groups`) are pipelined: while one half steps (in its
+        workers), the policy computes the other half's actions. Actions are drawn by inverse CDF from one
+        uniform number per agent-step, drawn for the whole rollout up front, so the draws do not depend on the
+        order in which the halves arrive."""
+        import torch
+
+        s = self.settings
+        b, n = s.num_envs, s.agents
+        rollout = Rollout(StorageShape(s.rollout, b, n, s.image_size, s.use_rgb, s.hidden,
+                                       max(self.net.config.message_floats, 1)))
+        gen = torch.Generator().manual_seed(s.seed * 1_000_003 + self.update)
+        draws = torch.rand((s.rollout, b, n), generator=gen, dtype=torch.float64).numpy()
+        groups = [slice(rows[0], rows[-1] + 1) for rows in sampler.groups]
+        acted = np.zeros((b, n), dtype=bool)
+        ended: list[np.ndarray] = []
+        for t in range(s.rollout + 1):
+            for g, rows in enumerate(groups):
+                if t > 0:
+                    t0 = time.perf_counter()
+                    sampler.wait(g)
+                    timing["sample"] += time.perf_counter() - t0
+                    self._outcome(rollout, t - 1, rows, arrays, acted, ended)
+                t0 = time.perf_counter()
+                hidden[rows] *= ~arrays["first"][rows][..., None]
+                logits, new_hidden, message, values = self._forward(arrays, rows, hidden[rows])
+                if t == s.rollout:  # bootstrap values of the state after the rollout
+                    rollout.data["values"][t, rows] = values
+                    timing["forward"] += time.perf_counter() - t0
+                    continue
+                probs = _softmax(logits)
+                actions = (np.cumsum(probs, axis=1)[:, :-1] <= draws[t, rows].reshape(-1, 1)).sum(axis=1)
+                logp = np.log(np.maximum(probs[np.arange(len(actions)), actions], 1e-12)).astype(np.float32)
+                shape = (rows.stop - rows.start, n)
+                rollout.put_observation(t, arrays, rows)
+                rollout.put_action(t, rows, hidden[rows], actions.reshape(shape), logp.reshape(shape), values)
+                arrays["actions"][rows] = actions.reshape(shape)
+                if message is not None:
+                    arrays["messages"][rows, :, : message.shape[-1]] = message.reshape(*shape, -1)
+                acted[rows] = arrays["alive"][rows]
+                hidden[rows] = new_hidden
+                timing["forward"] += time.perf_counter() - t0
+                t0 = time.perf_counter()
+                sampler.send(g)
+                timing["sample"] += time.perf_counter() - t0
+        return rollout, hidden, ended
+
+    def _forward(self, arrays: dict[str, np.ndarray], rows: slice, hidden: np.ndarray,
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+        """The policy on `rows` of the sampler's arrays from memories `hidden` (b, N, H): logits (b * N, 4),
+        new memories (b, N, H), messages (b * N, F) or None, values (b, N); numpy, on the host."""
         import torch
 
         from .model import to_tensors
 
-        s, net, dev = self.settings, self.net, self.device
+        net, dev = self.net, self.device
         cfg = net.config
-        b, n = s.num_envs, s.agents
-        rollout = Rollout(StorageShape(s.rollout, b, n, s.image_size, s.use_rgb, s.hidden,
-                                       max(cfg.message_floats, 1)))
-        gen = torch.Generator().manual_seed(s.seed * 1_000_003 + self.update)
-        ended: list[np.ndarray] = []
-        for t in range(s.rollout + 1):
-            t0 = time.perf_counter()
-            hidden = hidden * ~arrays["first"][..., None]
-            with torch.no_grad():
-                d, r, v = to_tensors(arrays["depth"], arrays.get("rgb"), arrays["vec"], dev)
-                h = torch.from_numpy(hidden.reshape(b * n, -1)).to(dev)
-                messages = lengths = None
-                if cfg.comm:
-                    messages = torch.from_numpy(arrays["inbox"][..., : cfg.message_floats]).flatten(0, 1).to(dev)
-                    lengths = torch.from_numpy(arrays["inbox_len"]).flatten(0, 1).to(dev)
-                logits, h_new, message = net.step(d, r, v, h, messages, lengths)
-                alive = torch.from_numpy(arrays["alive"]).to(dev).float()
-                values = net.value(h_new.reshape(b, n, -1), alive).cpu().numpy()
-                if t == s.rollout:  # bootstrap values of the state after the rollout
-                    rollout.data["values"][t] = values
-                    timing["forward"] += time.perf_counter() - t0
-                    break
-                probs = torch.softmax(logits.cpu(), dim=1)
-                actions = torch.multinomial(probs, 1, generator=gen)[:, 0]
-                logp = torch.log(probs.gather(1, actions[:, None])[:, 0].clamp(min=1e-12))
-            rollout.put_observation(t, arrays)
-            arrays["actions"][:] = actions.numpy().reshape(b, n)
-            if message is not None:
-                arrays["messages"][..., : cfg.message_floats] = message.cpu().numpy().reshape(b, n, -1)
-            alive_now = arrays["alive"].copy()
-            timing["forward"] += time.perf_counter() - t0
-            t0 = time.perf_counter()
-            sampler.step()
-            timing["sample"] += time.perf_counter() - t0
-            reward = arrays["reward"].copy()
-            if s.team_reward:
-                reward = np.repeat(reward.sum(axis=1, keepdims=True), n, axis=1)
-            rollout.put_step(t, hidden, actions.numpy().reshape(b, n), logp.numpy().reshape(b, n), values,
-                             reward, arrays["done"])
-            self.agent_steps += int(alive_now.sum())
-            hidden = h_new.cpu().numpy().reshape(b, n, -1)
-            for row in np.flatnonzero(arrays["stats"][:, 0] > 0):
-                ended.append(arrays["stats"][row].copy())
-        return rollout, hidden, ended
+        b, n = hidden.shape[:2]
+        with torch.no_grad():
+            d, r, v = to_tensors(arrays["depth"][rows], arrays["rgb"][rows] if "rgb" in arrays else None,
+                                 arrays["vec"][rows], dev)
+            h = torch.from_numpy(np.ascontiguousarray(hidden).reshape(b * n, -1)).to(dev)
+            messages = lengths = None
+            if cfg.comm:
+                messages = torch.from_numpy(arrays["inbox"][rows, ..., : cfg.message_floats]).flatten(0, 1).to(dev)
+                lengths = torch.from_numpy(arrays["inbox_len"][rows]).flatten(0, 1).to(dev)
+            logits, h_new, message = net.step(d, r, v, h, messages, lengths)
+            alive = torch.from_numpy(arrays["alive"][rows]).to(dev).float()
+            values = net.value(h_new.reshape(b, n, -1), alive).cpu().numpy()
+        return (logits.float().cpu().numpy(), h_new.cpu().numpy().reshape(b, n, -1),
+                None if message is None else message.cpu().numpy(), values)
+
+    def _outcome(self, rollout: Rollout, t: int, rows: slice, arrays: dict[str, np.ndarray], acted: np.ndarray,
+                 ended: list[np.ndarray]) -> None:
+        """Store step t's rewards and dones of `rows` once their step is in; count agent-steps and ended episodes."""
+        reward = arrays["reward"][rows].copy()
+        if self.settings.team_reward:
+            reward = np.repeat(reward.sum(axis=1, keepdims=True), reward.shape[1], axis=1)
+        rollout.put_outcome(t, rows, reward, arrays["done"][rows])
+        self.agent_steps += int(acted[rows].sum())
+        for row in np.flatnonzero(arrays["stats"][rows, 0] > 0):
+            ended.append(arrays["stats"][rows.start + row].copy())
 
     def _learn(self, rollout: Rollout) -> dict[str, float]:
         from .ppo import ppo_update
@@ -271,6 +311,13 @@ class Trainer:
         row["steps_per_second"] = (self.agent_steps - previous) / max(now - self._tick, 1e-9)
         self._tick = now
         return {k: row.get(k, float("nan")) for k in CURVE_COLUMNS}
+
+
+def _softmax(logits: np.ndarray) -> np.ndarray:
+    """Row-wise softmax in float64 (the action draw's CDF)."""
+    z = logits.astype(np.float64) - logits.max(axis=1, keepdims=True)
+    e = np.exp(z)
+    return e / e.sum(axis=1, keepdims=True)
 
 
 def _progress_line(row: dict[str, float], total: int) -> str:

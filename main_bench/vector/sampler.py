@@ -5,10 +5,16 @@
     arrays["actions"][:] = chosen         # the trainer writes actions (and messages) in place
     arrays = sampler.step()               # rewards, dones, alive masks, next observations, episode stats
 
+The rows also step in two halves (`groups`), so that a trainer computes one half's actions while the other half
+steps: `send(g)` starts group g's step with its rows of `actions`, `wait(g)` returns when its results are in
+the arrays. The halves are fixed by B alone (`layout.split_rows(B, 2)`), never by the workers.
+
 `process`: W worker processes (forkserver, else spawn), the arrays in `multiprocessing.shared_memory`; a step
 sends one short command per worker through a pipe and nothing else is pickled. `inline`: every sub-environment
 in this process (tests, W = 0). `ray`: Ray actors running the same `SubEnv` code (`vector.ray_sampler`).
-Sub-environment b is seeded from the base seed and b only, so results do not depend on W or the backend.
+Each worker process, Ray actor or the inline sampler owns one `batch.BatchSim` over its rows (every view it
+steps rendered in one call). Sub-environment b is seeded from the base seed and b only, so results do not
+depend on W or the backend.
 """
 
 from __future__ import annotations
@@ -21,10 +27,11 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..errors import InputError
-from ..worker_threads import single_threaded_children
+from ..worker_threads import RENDER_THREAD_VARIABLES, single_threaded_children
+from .batch import BatchSim
+from .groups import GroupStepper, halves, parts_of
 from .layout import VecSpec, allocate, layout, split_rows
 from .ray_sampler import RaySampler
-from .slot import SubEnv
 
 BACKENDS = ("process", "inline", "ray")
 
@@ -34,6 +41,8 @@ class Sampler(Protocol):
 
     spec: VecSpec
     arrays: dict[str, np.ndarray]
+    #: The rows of each group that steps on its own (`send` / `wait`): the two halves of B (one group if B = 1).
+    groups: list[list[int]]
 
     def reset(self) -> dict[str, np.ndarray]:
         """Reset every sub-environment; the shared arrays."""
@@ -41,31 +50,37 @@ class Sampler(Protocol):
     def step(self) -> dict[str, np.ndarray]:
         """Step every sub-environment with `arrays["actions"]` / `["messages"]`; the shared arrays."""
 
+    def send(self, group: int) -> None:
+        """Start stepping the rows of `groups[group]` with their `actions` / `messages`."""
+
+    def wait(self, group: int) -> dict[str, np.ndarray]:
+        """Wait until the step `send(group)` started is in the arrays; the shared arrays."""
+
     def close(self) -> None:
         """Stop the workers and free the memory."""
 
 
-class InlineSampler:
-    """Every sub-environment in the calling process."""
+class InlineSampler(GroupStepper):
+    """Every sub-environment in the calling process, in one `BatchSim` (`send` steps the group at once)."""
 
     def __init__(self, spec: VecSpec) -> None:
         self.spec = spec
         self.arrays = allocate(spec)
-        self.envs = [SubEnv(spec, b) for b in range(spec.num_envs)]
+        self.groups = halves(spec.num_envs)
+        self.sim = BatchSim(spec, list(range(spec.num_envs)))
 
     def reset(self) -> dict[str, np.ndarray]:
-        for env in self.envs:
-            env.reset(self.arrays)
+        self.sim.reset(self.arrays)
         return self.arrays
 
-    def step(self) -> dict[str, np.ndarray]:
-        for env in self.envs:
-            env.step(self.arrays)
+    def send(self, group: int) -> None:
+        self.sim.step(self.arrays, self.groups[group])
+
+    def wait(self, group: int) -> dict[str, np.ndarray]:
         return self.arrays
 
     def close(self) -> None:
-        for env in self.envs:
-            env.close()
+        self.sim.close()
 
 
 def _attach(names: dict[str, str], spec: VecSpec) -> tuple[dict[str, np.ndarray], list[Any]]:
@@ -78,31 +93,31 @@ def _attach(names: dict[str, str], spec: VecSpec) -> tuple[dict[str, np.ndarray]
 
 
 def _worker(conn: Any, spec: VecSpec, rows: list[int], names: dict[str, str]) -> None:
-    """Worker process: build its sub-environments, then answer `reset` / `step` / `close` commands."""
+    """Worker process: build the `BatchSim` of its rows, then answer `reset` / `step` / `close` commands."""
     arrays, blocks = _attach(names, spec)
-    envs: list[SubEnv] = []
+    sim: BatchSim | None = None
     try:
-        envs = [SubEnv(spec, b) for b in rows]
+        sim = BatchSim(spec, rows)
         conn.send(("ready", None))
         while True:
-            command = conn.recv()
+            command, rows = conn.recv()
             if command == "close":
                 break
-            for env in envs:
-                env.reset(arrays) if command == "reset" else env.step(arrays)
+            sim.reset(arrays) if command == "reset" else sim.step(arrays, rows)
             conn.send(("ok", None))
     except Exception as exc:  # reported to the trainer, which raises it
         conn.send(("error", f"{type(exc).__name__}: {exc}"))
     finally:
-        for env in envs:
-            env.close()
+        if sim is not None:
+            sim.close()
         del arrays
         for shm in blocks:
             shm.close()
 
 
-class ProcessSampler:
-    """Sub-environments in W worker processes, arrays in shared memory."""
+class ProcessSampler(GroupStepper):
+    """Sub-environments in W worker processes, arrays in shared memory. A worker whose rows lie in both halves
+    steps each half on its own command (in the order sent)."""
 
     def __init__(self, spec: VecSpec, workers: int = 2, start_method: str | None = None) -> None:
         self.spec = spec
@@ -118,19 +133,23 @@ class ProcessSampler:
             self.arrays[key] = np.ndarray(shape, dtype=dtype, buffer=shm.buf)
             self.arrays[key][...] = 0
         self._conns, self._procs = [], []
-        for rows in split_rows(spec.num_envs, workers):
+        self.groups = halves(spec.num_envs)
+        worker_rows = split_rows(spec.num_envs, workers)
+        #: per group: (worker, its rows in the group) for every worker that has some
+        self._parts = parts_of(self.groups, worker_rows)
+        for rows in worker_rows:
             parent, child = ctx.Pipe()
             proc = ctx.Process(target=_worker, args=(child, spec, rows, names), daemon=True)
-            with single_threaded_children():
+            with single_threaded_children(RENDER_THREAD_VARIABLES):
                 proc.start()
             child.close()
             self._conns.append(parent)
             self._procs.append(proc)
         self._gather()
 
-    def _gather(self) -> None:
+    def _gather(self, conns: list[Any] | None = None) -> None:
         errors = []
-        for conn in self._conns:
+        for conn in self._conns if conns is None else conns:
             try:
                 status, message = conn.recv()
             except EOFError:
@@ -141,22 +160,24 @@ class ProcessSampler:
             self.close()
             raise InputError(f"sampler worker failed: {errors[0]}")
 
-    def _command(self, command: str) -> dict[str, np.ndarray]:
+    def reset(self) -> dict[str, np.ndarray]:
         for conn in self._conns:
-            conn.send(command)
+            conn.send(("reset", None))
         self._gather()
         return self.arrays
 
-    def reset(self) -> dict[str, np.ndarray]:
-        return self._command("reset")
+    def send(self, group: int) -> None:
+        for w, rows in self._parts[group]:
+            self._conns[w].send(("step", rows))
 
-    def step(self) -> dict[str, np.ndarray]:
-        return self._command("step")
+    def wait(self, group: int) -> dict[str, np.ndarray]:
+        self._gather([self._conns[w] for w, _ in self._parts[group]])
+        return self.arrays
 
     def close(self) -> None:
         for conn, proc in zip(self._conns, self._procs, strict=True):
             with contextlib.suppress(BrokenPipeError, OSError):
-                conn.send("close")
+                conn.send(("close", None))
             proc.join(timeout=10)
             if proc.is_alive():
                 proc.terminate()

@@ -1,8 +1,10 @@
 """One sub-environment of a vectorised sampler: steps a `MainParallelEnv` from the shared action arrays and
 writes its packed results into row b of the shared arrays; resets itself when its episode ends.
 
-The same code runs in a worker process (arrays in shared memory), in a Ray actor (arrays of its own, sent
-back as one block per step) and in-process (tests). Infos are numeric only (`layout.EPISODE_STATS`).
+A step comes in two halves, so that a batch simulator (`vector.batch.BatchSim`) can render the views of all its
+sub-environments in one call between them: `step_state` (actions, physics, rules, rewards, episode statistics,
+the next episode's start when one ended) and `write_observations` (the packed observations from the rendered
+views). Infos are numeric only (`layout.EPISODE_STATS`).
 """
 
 from __future__ import annotations
@@ -16,9 +18,10 @@ from .obs import pack_observation
 
 
 class SubEnv:
-    """Sub-environment b of `spec`, writing into row b of `arrays` (see `layout.layout`)."""
+    """Sub-environment b of `spec`, writing into row b of `arrays` (see `layout.layout`). `share_with`: another
+    sub-environment of the same spec whose loaded scenes, navmeshes and target fields this one reuses."""
 
-    def __init__(self, spec: VecSpec, b: int) -> None:
+    def __init__(self, spec: VecSpec, b: int, share_with: SubEnv | None = None) -> None:
         from ..env import MainParallelEnv, RewardSettings
 
         self.spec, self.b = spec, b
@@ -26,30 +29,30 @@ class SubEnv:
                                    track=spec.track, renderer=spec.renderer, image_size=spec.image_size,
                                    max_steps=spec.max_steps, seed=spec.env_seed(b),
                                    message_floats=spec.message_floats, cache_dir=spec.cache_dir,
-                                   reward=RewardSettings(spec.distance_weight, spec.success_bonus, spec.step_penalty))
+                                   reward=RewardSettings(spec.distance_weight, spec.success_bonus, spec.step_penalty),
+                                   share_with=None if share_with is None else share_with.env)
         self.ids = list(self.env.possible_agents)
         self._episodes = 0
 
-    def reset(self, arrays: dict[str, np.ndarray]) -> None:
-        """Start a new episode; write its first observations (all agents alive, `first` set)."""
+    def reset_state(self, arrays: dict[str, np.ndarray]) -> None:
+        """Start a new episode (all agents alive, `first` set); its observations follow (`write_observations`)."""
         seed = self.spec.env_seed(self.b) * 7919 + self._episodes if self._episodes == 0 else None
-        observations, infos = self.env.reset(seed=seed)
+        infos = self.env.reset_state(seed=seed)
         self._episodes += 1
         n = len(self.ids)
         self._return = 0.0
         self._length = 0
         self._geodesic = np.array([infos[a]["distance_to_goal"] for a in self.ids], dtype=np.float64)
         self._path = np.zeros(n)
-        self._last_pos = np.array(self.env._sim.positions, dtype=np.float64)  # noqa: SLF001
+        self._last_pos = np.array(self.env.view_poses()[1], dtype=np.float64)
         self._success = np.zeros(n, dtype=bool)
-        self._write_obs(arrays, observations)
         arrays["in_region"][self.b] = self._in_region(infos, self.ids)
         arrays["alive"][self.b] = True
         arrays["first"][self.b] = True
 
-    def step(self, arrays: dict[str, np.ndarray]) -> None:
-        """Step with row b of `actions` (and `messages`); write rewards, dones, alive, next observations, and
-        the episode statistics when it ended (then reset)."""
+    def step_state(self, arrays: dict[str, np.ndarray]) -> None:
+        """Step with row b of `actions` (and `messages`); write rewards, dones, alive, and the episode statistics
+        when it ended (the next episode then starts); its observations follow (`write_observations`)."""
         b, env = self.b, self.env
         live = list(env.agents)
         actions: dict[str, Any] = {}
@@ -59,8 +62,8 @@ class SubEnv:
             i = self.ids.index(a)
             act = int(arrays["actions"][b, i])
             actions[a] = (act, arrays["messages"][b, i, :floats].copy()) if floats else act
-        observations, rewards, terms, truncs, infos = env.step(actions)
-        pos = np.array(env._sim.positions, dtype=np.float64)  # noqa: SLF001
+        rewards, terms, truncs, infos = env.step_state(actions)
+        pos = np.array(env.view_poses()[1], dtype=np.float64)
         moved = np.linalg.norm(pos - self._last_pos, axis=1)
         self._last_pos = pos
         reward = np.zeros(len(self.ids), dtype=np.float32)
@@ -80,9 +83,7 @@ class SubEnv:
         arrays["success"][b] = self._success
         arrays["stats"][b] = 0.0
         if env.agents:
-            alive = np.array([a in env.agents for a in self.ids])
-            self._write_obs(arrays, {a: observations[a] for a in env.agents})
-            arrays["alive"][b] = alive
+            arrays["alive"][b] = np.array([a in env.agents for a in self.ids])
             arrays["in_region"][b] = self._in_region(infos, env.agents)
             arrays["first"][b] = False
             return
@@ -91,29 +92,35 @@ class SubEnv:
         stats = dict(ep_end=1.0, ep_team_success=float(team), ep_success=float(self._success.mean()),
                      ep_spl=float(spl.mean()), ep_return=self._return, ep_length=float(self._length))
         arrays["stats"][b] = [stats[k] for k in EPISODE_STATS]
-        self.reset(arrays)
+        self.reset_state(arrays)
 
-    def _in_region(self, infos: dict[str, dict[str, Any]], live: list[str]) -> list[bool]:
-        """Per agent: it acts on and stands in its success region (the env's `in_success_region` info)."""
-        return [a in live and bool(infos[a].get("in_success_region", False)) for a in self.ids]
-
-    def _write_obs(self, arrays: dict[str, np.ndarray], observations: dict[str, dict[str, Any]]) -> None:
+    def write_observations(self, arrays: dict[str, np.ndarray], rgb: np.ndarray, depth: np.ndarray) -> None:
+        """Write the packed observations of the agents alive in row b from this team's views (rgb (N, H, W, 3)
+        uint8, depth (N, H, W, 1) float32 metres, as `Renderer.render` gives them); zeros for the others."""
         b, use_rgb = self.b, self.spec.use_rgb
+        alive = arrays["alive"][b]
+        observations = self.env.observations(rgb, depth)
         arrays["depth"][b] = 0
         arrays["vec"][b] = 0.0
         arrays["inbox"][b] = 0.0
         arrays["inbox_len"][b] = 0
         for a, obs in observations.items():
             i = self.ids.index(a)
-            depth, rgb, vec = pack_observation(obs, use_rgb)
-            arrays["depth"][b, i] = depth
+            if not alive[i]:
+                continue
+            packed_depth, packed_rgb, vec = pack_observation(obs, use_rgb)
+            arrays["depth"][b, i] = packed_depth
             arrays["vec"][b, i] = vec
             if use_rgb:
-                arrays["rgb"][b, i] = rgb
+                arrays["rgb"][b, i] = packed_rgb
             if "inbox" in obs:
                 f = self.spec.message_floats
                 arrays["inbox"][b, i, :, :f] = obs["inbox"]["messages"]
                 arrays["inbox_len"][b, i] = obs["inbox"]["lengths"]
+
+    def _in_region(self, infos: dict[str, dict[str, Any]], live: list[str]) -> list[bool]:
+        """Per agent: it acts on and stands in its success region (the env's `in_success_region` info)."""
+        return [a in live and bool(infos[a].get("in_success_region", False)) for a in self.ids]
 
     def close(self) -> None:
         """Close the simulator."""

@@ -77,7 +77,7 @@ def test_agents_leave_individually_and_sub_envs_reset_themselves(tiny_dataset):
     sampler = make_sampler(_spec(tiny_dataset, num_envs=1, task="individual"), "inline")
     try:
         arrays = sampler.reset()
-        env = sampler.envs[0].env
+        env = sampler.sim.envs[0].env
         world = EpisodeWorld(env._loop, env._fields)  # the evaluator's privileged view, to reach the goal
         oracle = OracleBaseline(seed=0)
         ids = tuple(env.possible_agents)

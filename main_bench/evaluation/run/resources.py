@@ -41,6 +41,15 @@ class EpisodeResources:
         self._fields: OrderedDict[tuple, Any] = OrderedDict()
         self._field_sizes: dict[tuple, int] = {}
 
+    def sibling(self, seed: int) -> EpisodeResources:
+        """Resources of the same data set and settings that share this one's scenes, navmeshes and target fields
+        (loaded once for both) but keep simulators of their own (a simulator holds one team's state), seeded with
+        `seed`."""
+        other = EpisodeResources(self.manifest, self.sim_settings, self.cache_dir, seed)
+        other._scenes, other._plan_navmeshes = self._scenes, self._plan_navmeshes
+        other._fields, other._field_sizes = self._fields, self._field_sizes
+        return other
+
     def scene(self, scene_id: str) -> tuple[Any, Any]:
         """(Scene, NavMesh) of `scene_id`: the navmesh is the one stored in the data set (`load_navmesh`)."""
         if scene_id not in self._scenes:

@@ -311,7 +311,8 @@ def check_device(index: int) -> str:
 class GLRenderer:
     """Batched egocentric RGB-D renderer on moderngl + EGL (see the module docstring).
 
-    `device_index`: the EGL device to render on (as `eglQueryDevicesEXT` lists them: GPUs, then Mesa's
+    `context`: render in another renderer's context (`sim.render.batch`: one context for many scenes) instead of
+    a new one. `device_index`: the EGL device to render on (as `eglQueryDevicesEXT` lists them: GPUs, then Mesa's
     software device), None: EGL's default display. `one_pass`: render all views of a call in one pass (True;
     raises GLUnavailable when the context cannot) or one pass per view (False, the default: the faster on
     llvmpipe and on an NVIDIA H200, docs/evaluation.md). `cull_min_triangles`:
@@ -322,8 +323,10 @@ class GLRenderer:
 
     def __init__(self, scene: Scene, camera: CameraSettings, *, reason: str = "requested",
                  agent_radius: float = 0.18, agent_height: float = 1.5, device_index: int | None = None,
-                 one_pass: bool = False, cull_min_triangles: int = CULL_MIN_TRIANGLES) -> None:
-        self._ctx = _context(device_index)
+                 one_pass: bool = False, cull_min_triangles: int = CULL_MIN_TRIANGLES, context=None) -> None:
+        #: False when the context is another renderer's (`context`): it is then not released here.
+        self._owns_context = context is None
+        self._ctx = _context(device_index) if context is None else context
         self.reason = reason
         self.camera = camera
         self.device_index = device_index
@@ -341,18 +344,19 @@ class GLRenderer:
         else:
             self._views_per_pass = min(self._views_per_pass, int(info.get("GL_MAX_VIEWPORTS", 16)))
         if one_pass and self._extension is None:
-            self._ctx.release()
+            self._release_context()
             raise GLUnavailable(f"one-pass rendering needs GL 4.3 and {' or '.join(VIEWPORT_INDEX_EXTENSIONS)}; "
                                 f"{self.device} has GL {self._ctx.version_code}") from None
         #: True when all views of a call are drawn in one pass (viewport index chosen in the vertex shader).
         self.one_pass = self._extension is not None
         self._batches: list[_Batch] = []
+        self._tex = None
         self._fbo = self._rbs = self._ubo = self._inst = self._agent_vao = self._cmds = None
         self._fbo_views = self._capacity = self._cmd_capacity = 0
         try:
             self._setup(scene, camera, agent_radius, agent_height, cull_min_triangles)
         except Exception as exc:
-            self._ctx.release()
+            self._release_context()
             raise GLUnavailable(f"context created but setup failed ({type(exc).__name__}: {exc})") from None
 
     def _setup(self, scene: Scene, camera: CameraSettings, agent_radius: float, agent_height: float,
@@ -523,7 +527,8 @@ class GLRenderer:
         return draw
 
     def _per_view(self, feet, eyes, fwd, right):
-        """Upload the views; returns the function drawing one pass, view by view (one viewport each)."""
+        """Upload the views; returns the function drawing one pass, view by view (one viewport each): view k of
+        the pass into tile `first_tile + k` of the bound framebuffer."""
         n, h, w = len(feet), self.camera.height, self.camera.width
         views, agents = self._views, self._agents
         views[:n, 0:3], views[:n, 4:7], views[:n, 8:11] = eyes, fwd, right
@@ -531,9 +536,11 @@ class GLRenderer:
         self._ubo.write(views[:n])
         self._inst.write(agents[:n])
 
-        def draw(ctx, pass_views: range) -> None:
+        def draw(ctx, pass_views: range, first_tile: int = 0) -> None:
+            if self._tex is not None:  # unit 0 may hold another scene's textures in a shared context
+                self._tex.use(0)
             for k, i in enumerate(pass_views):
-                ctx.viewport = (0, k * h, w, h)
+                ctx.viewport = (0, (first_tile + k) * h, w, h)
                 self._ubo.bind_to_uniform_block(0, offset=i * self._stride, size=self._stride)
                 for batch in self._batches:
                     batch.draw(eyes[i], fwd[i], right[i])
@@ -553,8 +560,30 @@ class GLRenderer:
         if problems:
             raise GLUnavailable("test render is wrong: " + "; ".join(problems))
 
-    def close(self) -> None:
-        """Release the GL context and everything in it."""
-        if self._ctx is not None:
+    def draw_team(self, feet: np.ndarray, yaws: np.ndarray, first_tile: int) -> None:
+        """Draw every agent's view of one team into tiles `first_tile`, `first_tile + 1`, ... of the framebuffer
+        bound in this renderer's (shared) context, without clearing or reading it: `sim.render.batch` renders
+        many teams, of any scenes, into one framebuffer and reads it back once."""
+        feet = np.asarray(feet, dtype=np.float64).reshape(-1, 3)
+        eyes, fwd, right, _ = view_axes(feet, yaws, self.camera)
+        self._ensure_capacity(len(feet))
+        self._per_view(feet, eyes, fwd, right)(self._ctx, range(len(feet)), first_tile)
+
+    def _release_context(self) -> None:
+        if self._owns_context:
             self._ctx.release()
-            self._ctx = None
+
+    def close(self) -> None:
+        """Release the GL context and everything in it (only this renderer's objects, when the context is shared)."""
+        if self._ctx is None:
+            return
+        if self._owns_context:
+            self._ctx.release()
+        else:
+            for batch in self._batches:
+                batch.release()
+            for obj in (self._tex, self._cyl_vbo, self._agent_vao, self._inst, self._ubo, self._fbo, *(self._rbs or ()),
+                        self._cmds, *self._progs):
+                if obj is not None:
+                    obj.release()
+        self._ctx = None
