@@ -78,3 +78,11 @@ def test_episodes_of_another_goal_kind_are_refused(tmp_path):
     assert "\n" not in text and text.startswith(f"{folder / 'metadata.json'}: records goal 'point' (settings.goal)")
     assert f"split 'val' of {sample} holds object goals; evaluate it on a point-goal data set" in text
     assert f"main-bench train point-goals {sample} --out DIR" in text
+
+
+def test_a_metadata_file_nested_too_deeply_is_one_line(tmp_path):
+    folder = _folder(tmp_path, None)
+    (folder / "metadata.json").write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(InputError) as err:
+        recorded_settings(str(folder))
+    assert str(err.value) == f"{folder / 'metadata.json'}: not a valid submission metadata: nested too deeply"
