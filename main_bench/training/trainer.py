@@ -2,8 +2,9 @@
 
 Flows in: `TrainSettings` and a run folder. Flows out, in the run folder: `checkpoint.pt` (every K updates and
 at exit; a run started again on the same folder resumes from it, also after a SIGKILL), `curve.csv` and
-`curve.png` (return, success and SPL, episode length, rate of `found` calls against agent-steps), TensorBoard events under `tb/` when `tensorboard` is
-installed, and `submission/` (`submission.write_submission`), which `main-bench evaluate` scores unchanged.
+`curve.png` (return, success and SPL, episode length, rate of `found` calls against agent-steps), TensorBoard
+events under `tb/` when `tensorboard` is installed, and `submission/` (`submission.write_submission`), which
+`main-bench evaluate` scores unchanged. The progress callback gets one line per update (`monitor.progress_line`).
 """
 
 from __future__ import annotations
