@@ -120,7 +120,7 @@ class MainParallelEnv(ParallelEnv):
         if n not in sizes:
             raise DatasetError(f"no {n}-agent episodes in split {split!r}; it has {sizes}", path=episodes)
         pool = load_episodes(episodes, split, task, n)
-        kinds = ["object" if int(e.target_instance_ids[0]) >= 0 else "point" for e in pool]
+        kinds = [e.goal_kind for e in pool]
         if goal is None:
             found = sorted(set(kinds))
             if len(found) > 1:

@@ -98,6 +98,8 @@ def read_json(path: str | Path, *, what: str = "JSON file") -> Any:
         return json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise InputError(f"not a valid {what}: {exc}", path=path) from None
+    except RecursionError:  # nesting deeper than the decoder's recursion limit (a hostile upload's file)
+        raise InputError(f"not a valid {what}: nested too deeply", path=path) from None
 
 
 def check_schema_version(doc: dict[str, Any], expected: int, path: str | Path, what: str) -> None:

@@ -35,3 +35,12 @@ def fraction(value: float | None) -> str:
 def interval(low: float | None, high: float | None, metric: str = "success") -> str:
     """A confidence interval as printed: `[low, high]` with the metric's decimals (a rate's by default)."""
     return f"[{fmt_value(metric, low)}, {fmt_value(metric, high)}]"
+
+
+def clock(seconds: float) -> str:
+    """A duration as a clock reads it: `m:ss` under an hour, `h:mm:ss` from one (whole seconds, rounded down;
+    negative durations print as 0:00)."""
+    whole = max(0, int(seconds))
+    hours, rest = divmod(whole, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"

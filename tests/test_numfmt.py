@@ -33,16 +33,19 @@ def test_cli_prints_of_success_and_spl_are_fractions():
 def test_no_cli_print_formats_a_metric_itself():
     """Success and SPL reach the user only through `numfmt` (no percentages, no ad-hoc decimals)."""
     metric = re.compile(r"(success|spl)\b[^\n]*\{[^}]*(:\.\d+f|100 \*)", re.IGNORECASE)
-    files = [*sorted((REPO / "main_bench" / "cli").glob("*.py")), REPO / "main_bench" / "training" / "trainer.py"]
+    files = [*sorted((REPO / "main_bench" / "cli").glob("*.py")), REPO / "main_bench" / "training" / "trainer.py",
+             REPO / "main_bench" / "training" / "monitor.py"]
     offenders = [f"{f.name}: {m.group(0)}" for f in files for m in metric.finditer(f.read_text())]
     assert not offenders, offenders
 
 
 def test_the_training_progress_line_prints_fractions_and_na_before_any_episode():
-    from main_bench.training.trainer import _progress_line
+    from main_bench.training.monitor import progress_line
 
     row = {"update": 1, "agent_steps": 32, "steps_per_second": 8.0, "episodes": 0, "success": float("nan"),
-           "team_success": float("nan"), "reward": float("nan")}
-    assert "success n/a  team success n/a  reward n/a" in _progress_line(row, 2)
-    row.update(episodes=2, success=0.5, team_success=0.25, reward=-0.25)
-    assert "success 0.500  team success 0.250  reward -0.25" in _progress_line(row, 2)
+           "team_success": float("nan"), "reward": float("nan"), "found_rate": float("nan")}
+    assert "success n/a  team success n/a  found rate n/a  reward n/a" in progress_line(row, 2, "0:01 elapsed")
+    row.update(episodes=2, success=0.5, team_success=0.25, reward=-0.25, found_rate=0.125)
+    line = progress_line(row, 2, "0:01 elapsed")
+    assert "success 0.500  team success 0.250  found rate 0.125  reward -0.25" in line
+    assert line.startswith("update 1/2  0:01 elapsed  ")

@@ -24,8 +24,10 @@ def check_agent(
                                "with policy.py, or baseline:comm."),
     agents: int = typer.Option(2, "--agents", help="Team size."),
     task: str = typer.Option("shared", "--task", help="Sub-task: shared or individual."),
-    track: str = typer.Option("egocentric", "--track", help="Track: egocentric or gps."),
-    goal: str = typer.Option("object", "--goal", help="Goal kind: object (category id) or point."),
+    track: str | None = typer.Option(None, "--track", help="Track: egocentric or gps (default: the one the "
+                                     "submission's metadata.json records, else egocentric)."),
+    goal: str | None = typer.Option(None, "--goal", help="Goal kind: object (category id) or point (default: "
+                                    "the one the submission's metadata.json records, else object)."),
     steps: int = typer.Option(20, "--steps", help="Steps per check episode (the last agent is done halfway)."),
     seed: int = typer.Option(0, "--seed", help="Seed given to the policy and to the synthetic observations."),
     step_seconds: float = typer.Option(10.0, "--step-seconds", help="Time limit per act call."),
@@ -33,8 +35,9 @@ def check_agent(
     no_sandbox: bool = typer.Option(False, "--no-sandbox", help="Run the policy without the bubblewrap sandbox "
                                     "(the isolation check then fails)."),
     mode: str | None = typer.Option(None, "--mode", help="central (a team policy) or silent / comm (an agent "
-                                    "policy: one process per agent); default: the policy's own kind (central for "
-                                    "a team policy, comm for an agent policy)."),
+                                    "policy: one process per agent); default: the one the submission's "
+                                    "metadata.json records, else the policy's own kind (central for a team "
+                                    "policy, comm for an agent policy)."),
     message_floats: int = typer.Option(32, "--message-floats", help="comm mode: largest message (float32 values)."),
     as_json: bool = JsonOption,
 ) -> None:
@@ -42,11 +45,16 @@ def check_agent(
     policy: silent or comm mode, one process per agent), answers with valid actions (and messages) for exactly
     the acting agents, is deterministic for a seed and stays within the time limit, in its own process."""
     from ..evaluation.policy.check import CheckSettings, check_policy, mode_for, policy_kind
+    from ..evaluation.policy.recorded import recorded_settings
     from ..evaluation.policy.submission import parse_spec
     from ..evaluation.process.isolation import Limits
     from ..evaluation.process.sandbox import SandboxSettings, require_sandbox
 
     policy_spec = parse_spec(spec)
+    recorded = recorded_settings(spec)
+    track, goal = recorded.settle("track", track, "egocentric"), recorded.settle("goal", goal, "object")
+    mode_given = mode is not None
+    mode = recorded.settle("mode", mode, None)
     if not no_sandbox:
         require_sandbox()
     limits = Limits(step_seconds=step_seconds, memory_mb=memory_mb)
@@ -59,7 +67,7 @@ def check_agent(
     payload = report.to_dict()
     payload["spec"] = spec
     payload["kind"] = "team policy" if "team" in roles else "agent policy" if roles else "unknown"
-    payload["mode_given"] = mode is not None
+    payload["mode_given"] = mode_given
     emit("evaluate check-agent", payload, as_json, _render)
     if not report.passed:
         raise typer.Exit(1)

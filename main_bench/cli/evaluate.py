@@ -90,9 +90,12 @@ def evaluate(
                                      "stratified by scene (default: the whole split)."),
     executor: str = typer.Option("local", "--executor", help="local or ray."),
     seed: int = typer.Option(0, "--seed", help="Evaluation seed (policy seeds derive from it and episode ids)."),
-    track: str = typer.Option("egocentric", "--track", help="Sensor track: egocentric or gps."),
-    mode: str = typer.Option("central", "--mode", help="Coordination mode: central (one team policy), silent "
-                             "(one agent policy per agent, no messages) or comm (agent policies with messages)."),
+    track: str | None = typer.Option(None, "--track", help="Sensor track: egocentric or gps (default: the one "
+                                     "the submission's metadata.json records, else egocentric)."),
+    mode: str | None = typer.Option(None, "--mode", help="Coordination mode: central (one team policy), silent "
+                                    "(one agent policy per agent, no messages) or comm (agent policies with "
+                                    "messages); default: the one the submission's metadata.json records, else "
+                                    "central."),
     message_floats: int = typer.Option(32, "--message-floats", help="comm mode: largest message per agent and "
                                        "step, in float32 values (32 = 128 bytes)."),
     name: str = typer.Option("", "--name", help="Submission name for the leaderboard."),
@@ -115,6 +118,7 @@ def evaluate(
     trajectories and summary.json with 95% CIs."""
     if ctx.invoked_subcommand is not None:
         return
+    from ..evaluation.policy.recorded import recorded_settings
     from ..evaluation.run.runner import evaluate as run_evaluation
     from ..evaluation.run.settings import EvalSettings, PolicyLimits, SubmissionMeta
 
@@ -125,6 +129,8 @@ def evaluate(
     refuse_output_over_inputs(out, {"--episodes": episodes, "--agent": spec_path})  # type: ignore[arg-type]
     if task not in ("shared", "individual", "both"):
         raise InputError(f"--task must be shared, individual or both, got {task!r}")
+    recorded = recorded_settings(str(agent))
+    track, mode = recorded.settle("track", track, "egocentric"), recorded.settle("mode", mode, "central")
     settings = EvalSettings(
         episodes=Path(episodes), split=split, agent=str(agent), out=Path(out),  # type: ignore[arg-type]
         tasks=None if task == "both" else (task,),
@@ -138,6 +144,7 @@ def evaluate(
         sandbox=not no_sandbox,
         gpu=gpu,
     )
+    recorded.check_goals(settings.episodes, settings.split, settings.tasks, settings.agents)
     if gpu is not None and renderer != "tiny":
         from ..sim.render.gl import check_device
 

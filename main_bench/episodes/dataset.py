@@ -12,12 +12,12 @@ from ..io import sha256_file
 from ..parquet_read import read_parquet, read_values
 from ..scenes.loader import scene_content_hash
 from .manifest import Manifest, SceneEntry, ShardEntry, read_manifest
-from .schema import PARTITION_SCHEMA, ROW_SCHEMA, Episode
+from .schema import PARTITION_SCHEMA, ROW_SCHEMA, Episode, goal_kind
 
 _FIX = "restore it or regenerate the data set"
 
-__all__ = ["Manifest", "SceneEntry", "ShardEntry", "episode_scenes", "load_episodes", "load_navmesh", "load_table",
-           "read_manifest", "resolve_scene"]
+__all__ = ["Manifest", "SceneEntry", "ShardEntry", "episode_scenes", "goal_kinds", "load_episodes", "load_navmesh",
+           "load_table", "read_manifest", "resolve_scene"]
 
 
 def shard_files(manifest: Manifest, split: str | None = None, task: str | None = None,
@@ -56,6 +56,14 @@ def episode_scenes(manifest: Manifest, split: str, task: str, agents: int) -> tu
                          error=DatasetError, fix=_FIX)
     pairs = sorted(zip(values["episode_id"], values["scene_id"], strict=True))
     return [e for e, _ in pairs], [s for _, s in pairs]
+
+
+def goal_kinds(manifest: Manifest, split: str, task: str | None = None, agents: int | None = None) -> set[str]:
+    """The goal kinds (`object`, `point`: `schema.goal_kind`) of a split's episodes (of one task / agent count
+    when given), from one column of its shards, read without pandas."""
+    values = read_values(shard_files(manifest, split, task, agents), ["target_instance_ids"], error=DatasetError,
+                         fix=_FIX)
+    return {goal_kind(ids) for ids in values["target_instance_ids"]}
 
 
 def check_checksums(manifest: Manifest, shards: list[ShardEntry]) -> None:

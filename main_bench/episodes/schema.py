@@ -8,6 +8,7 @@ in the canonical frame (+Z up, metres) at the agent's feet on the navmesh; yaws 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -55,6 +56,11 @@ PARTITION_SCHEMA = pa.schema(
 )
 
 
+def goal_kind(target_instance_ids: Sequence[int]) -> str:
+    """An episode's goal kind from its targets' instance ids: `object` (ids >= 0) or `point` (-1)."""
+    return "object" if int(target_instance_ids[0]) >= 0 else "point"
+
+
 @dataclass(frozen=True, eq=False)
 class Episode:
     """One episode as the evaluator and the statistics use it (arrays are float64 copies of the row)."""
@@ -79,6 +85,11 @@ class Episode:
     def num_agents(self) -> int:
         """Number of agents N."""
         return len(self.start_yaws)
+
+    @property
+    def goal_kind(self) -> str:
+        """`object` or `point` (`goal_kind`)."""
+        return goal_kind(self.target_instance_ids)
 
     @classmethod
     def from_row(cls, row: dict) -> Episode:

@@ -1,5 +1,7 @@
-"""Learning curves of a run: `curve.csv` (one row per update) and `curve.png` (Fig. 5 of the MAIN paper:
-reward, success and SPL against agent-steps). Flows in: the trainer's rows; out: the two files, atomically."""
+"""Learning curves of a run: `curve.csv` (one row per update) and `curve.png` (four panels against agent-steps:
+team episode return; agent success, team success and SPL (Fig. 5 of the MAIN paper); episode length; the rate of
+`found` calls). Flows in: the trainer's rows; out: the two files, atomically. A `curve.csv` written before a
+column existed is still read: the missing column reads as NaN."""
 
 from __future__ import annotations
 
@@ -11,7 +13,8 @@ from pathlib import Path
 from ..io import atomic_path, atomic_write_text
 
 CURVE_COLUMNS = ("update", "agent_steps", "episodes", "wall_seconds", "steps_per_second", "reward", "success",
-                 "team_success", "spl", "episode_length", "policy_loss", "value_loss", "entropy", "approx_kl", "found_loss")
+                 "team_success", "spl", "episode_length", "found_rate", "policy_loss", "value_loss", "entropy", "approx_kl",
+                 "found_loss")
 
 
 def write_curve(run_dir: Path, rows: list[dict[str, float]]) -> None:
@@ -27,31 +30,36 @@ def write_curve(run_dir: Path, rows: list[dict[str, float]]) -> None:
 
 
 def read_curve(path: Path) -> list[dict[str, float]]:
-    """Rows of a `curve.csv` (empty when there is none)."""
+    """Rows of a `curve.csv` (empty when there is none), each with every `CURVE_COLUMNS` key: NaN for a column
+    the file lacks (one written before the column existed)."""
     if not path.is_file():
         return []
     with path.open(newline="") as fh:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+        return [{k: float(row.get(k) or math.nan) for k in CURVE_COLUMNS} for row in csv.DictReader(fh)]
 
 
 def plot_curve(rows: list[dict[str, float]], path: Path, title: str = "") -> None:
-    """Three panels (team reward, success and team success, SPL) against agent-steps, as a PNG."""
+    """Four panels against agent-steps, as a PNG: team episode return; agent success, team success and agent
+    SPL; episode length (steps); `found` calls per alive agent-step of each update's rollout."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     x = [r["agent_steps"] for r in rows]
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.4))
-    panels = ((("reward", "team episode return"),), (("success", "agent success"), ("team_success", "team success")),
-              (("spl", "agent SPL"),))
-    for ax, series in zip(axes, panels, strict=True):
+    fig, axes = plt.subplots(2, 2, figsize=(10, 6.4))
+    panels = ((("reward", "team episode return"),),
+              (("success", "agent success"), ("team_success", "team success"), ("spl", "agent SPL")),
+              (("episode_length", "episode length (steps)"),),
+              (("found_rate", "found calls per agent-step"),))
+    for ax, series in zip(axes.flat, panels, strict=True):
         for key, label in series:
-            ax.plot(x, [r[key] for r in rows], label=label)
+            ax.plot(x, [r.get(key, math.nan) for r in rows], label=label)
         ax.set_xlabel("agent-steps")
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
-    fig.suptitle(title or f"{len(rows)} updates (moving average over the last 50 episodes)", fontsize=9)
+    fig.suptitle(title or f"{len(rows)} updates (episode figures: moving average over the last 50 episodes; found "
+                 "calls: each update's rollout)", fontsize=9)
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=90)

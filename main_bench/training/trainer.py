@@ -2,8 +2,9 @@
 
 Flows in: `TrainSettings` and a run folder. Flows out, in the run folder: `checkpoint.pt` (every K updates and
 at exit; a run started again on the same folder resumes from it, also after a SIGKILL), `curve.csv` and
-`curve.png` (reward, success, SPL against agent-steps), TensorBoard events under `tb/` when `tensorboard` is
-installed, and `submission/` (`submission.write_submission`), which `main-bench evaluate` scores unchanged.
+`curve.png` (return, success and SPL, episode length, rate of `found` calls against agent-steps), TensorBoard
+events under `tb/` when `tensorboard` is installed, and `submission/` (`submission.write_submission`), which
+`main-bench evaluate` scores unchanged. The progress callback gets one line per update (`monitor.progress_line`).
 """
 
 from __future__ import annotations
@@ -21,10 +22,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..io import atomic_write_bytes
-from ..numfmt import fraction
 from ..vector.layout import EPISODE_STATS, VecSpec
 from .curves import CURVE_COLUMNS, read_curve, write_curve
 from .gae import gae
+from .monitor import found_rate, progress_line, time_status
 from .settings import TrainSettings
 from .storage import Rollout, StorageShape
 
@@ -158,6 +159,7 @@ class Trainer:
         # While a half steps in its workers, the forward of the other half shares the cores with them: one torch
         # thread then, since threads waiting on each other stall when the cores are oversubscribed.
         collect_threads = 1 if s.backend != "inline" else update_threads
+        first_update = self.update
         try:
             arrays = sampler.reset()
             hidden = np.zeros((s.num_envs, s.agents, s.hidden), dtype=np.float32)
@@ -167,18 +169,21 @@ class Trainer:
                 torch.set_num_threads(collect_threads)
                 rollout, hidden, ended = self._collect(sampler, arrays, hidden, timing)
                 torch.set_num_threads(update_threads)
+                found = found_rate(rollout.data)
                 t0 = time.perf_counter()
                 loss = self._learn(rollout)
                 timing["update"] += time.perf_counter() - t0
                 losses.append(loss)
                 self.update += 1
-                row = self._curve_row(ended, time.perf_counter() - start, loss)
+                row = self._curve_row(ended, time.perf_counter() - start, loss, found)
                 self.curve.append(row)
                 if tb is not None:
                     for key, value in row.items():
                         tb.add_scalar(key, value, int(row["agent_steps"]))
                 if self.progress:
-                    self.progress(_progress_line(row, s.updates))
+                    times = time_status(time.perf_counter() - start, s.max_minutes, self.update - first_update,
+                                        s.updates - self.update)
+                    self.progress(progress_line(row, s.updates, times))
                 if self.update % s.checkpoint_every == 0:
                     self.checkpoint(self.wall_before + time.perf_counter() - start)
         finally:
@@ -296,7 +301,8 @@ class Trainer:
         self.net.eval()
         return out
 
-    def _curve_row(self, ended: list[np.ndarray], seconds: float, loss: dict[str, float]) -> dict[str, float]:
+    def _curve_row(self, ended: list[np.ndarray], seconds: float, loss: dict[str, float],
+                   found: float) -> dict[str, float]:
         self.episodes += len(ended)
         self.window.extend(ended)
         averages = np.array(self.window).mean(axis=0) if self.window else np.full(len(EPISODE_STATS), np.nan)
@@ -306,7 +312,7 @@ class Trainer:
                "episodes": float(self.episodes), "wall_seconds": self.wall_before + seconds,
                "reward": float(mean["ep_return"]), "team_success": float(mean["ep_team_success"]),
                "success": float(mean["ep_success"]), "spl": float(mean["ep_spl"]),
-               "episode_length": float(mean["ep_length"]), **loss}
+               "episode_length": float(mean["ep_length"]), "found_rate": found, **loss}
         now = time.perf_counter()
         row["steps_per_second"] = (self.agent_steps - previous) / max(now - self._tick, 1e-9)
         self._tick = now
@@ -318,13 +324,6 @@ def _softmax(logits: np.ndarray) -> np.ndarray:
     z = logits.astype(np.float64) - logits.max(axis=1, keepdims=True)
     e = np.exp(z)
     return e / e.sum(axis=1, keepdims=True)
-
-
-def _progress_line(row: dict[str, float], total: int) -> str:
-    return (f"update {int(row['update'])}/{total}  agent-steps {int(row['agent_steps']):,}  "
-            f"{row['steps_per_second']:.0f} agent-steps/s  episodes {int(row['episodes'])}  "
-            f"success {fraction(row['success'])}  team success {fraction(row['team_success'])}  "
-            f"reward {'n/a' if np.isnan(row['reward']) else format(row['reward'], '.2f')}")
 
 
 def _tensorboard(run_dir: Path) -> Any:
