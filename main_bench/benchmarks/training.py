@@ -50,14 +50,15 @@ def point_goal_sample() -> Path:
 
 
 def shipped_settings(updates: int, envs: int = TRAIN_ENVS, backend: str = "process", workers: int = 2,
-                     episodes: Path | None = None) -> Any:
-    """The `TrainSettings` of the measurement (see the module docstring)."""
+                     episodes: Path | None = None, split: str = "train", cache_dir: Path | None = None) -> Any:
+    """The `TrainSettings` of the measurement (see the module docstring); another data set for tests."""
     from ..training.ppo import PPOSettings
     from ..training.settings import TrainSettings
 
     return TrainSettings(episodes=str(episodes or point_goal_sample()), algo="ippo", goal="point", track="gps",
                          image_size=64, num_envs=envs, workers=workers, backend=backend, rollout=64,
-                         updates=updates, checkpoint_every=10_000, ppo=PPOSettings(epochs=2))
+                         updates=updates, checkpoint_every=10_000, ppo=PPOSettings(epochs=2), split=split,
+                         cache_dir=None if cache_dir is None else str(cache_dir))
 
 
 def _rates(trainer: Any, started: float) -> tuple[float, float, Any]:
@@ -72,9 +73,10 @@ def _rates(trainer: Any, started: float) -> tuple[float, float, Any]:
 
 
 def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int = TRAIN_THREADS,
-             episodes: Path | None = None) -> dict[str, Any]:
+             episodes: Path | None = None, **data: Any) -> dict[str, Any]:
     """Trainer throughput (process sampler, steady and overall) and its time split (in-process sampler, timed
-    simulator steps and renders), with `envs` sub-environments and `threads` torch threads in the trainer."""
+    simulator steps and renders), with `envs` sub-environments and `threads` torch threads in the trainer;
+    `data`: `split` and `cache_dir` of another data set (tests)."""
     import torch
 
     from ..sim.render.batch import BatchRenderer
@@ -84,7 +86,7 @@ def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int =
     torch.set_num_threads(threads)
     episodes = episodes or point_goal_sample()
     started = time.perf_counter()
-    fast = Trainer(shipped_settings(updates, envs, episodes=episodes), workdir / "process")
+    fast = Trainer(shipped_settings(updates, envs, episodes=episodes, **data), workdir / "process")
     steady, overall, _ = _rates(fast, started)
 
     totals = {"render": 0.0, "physics": 0.0}
@@ -99,7 +101,7 @@ def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int =
                 totals[key] += time.perf_counter() - t0
         return call
 
-    trainer = Trainer(shipped_settings(updates, envs, backend="inline", workers=0, episodes=episodes),
+    trainer = Trainer(shipped_settings(updates, envs, backend="inline", workers=0, episodes=episodes, **data),
                       workdir / "inline")
     BatchRenderer.render, Simulator.step = timed("render"), timed("physics")  # type: ignore[method-assign]
     try:

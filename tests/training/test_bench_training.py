@@ -1,19 +1,33 @@
-"""`benchmarks.training.training`: the trainer throughput measure and its time split run for real (a tiny
-budget) and report every part of the training loop."""
+"""`benchmarks.training`: the trainer throughput measure, its time split and the batch renderer measure run for
+real (a tiny budget on the tiny data set) and report every part."""
 
 from __future__ import annotations
+
+import math
 
 import pytest
 
 pytestmark = pytest.mark.slow
 
 
-def test_training_measure_reports_rate_and_time_split(tmp_path):
+def test_training_measure_reports_rates_and_time_split(tiny_dataset, tmp_path):
     from main_bench.benchmarks.training import training
 
-    doc = training(1, tmp_path, envs=1, threads=1)
-    assert doc["agent_steps"] > 0 and doc["agent_steps_per_s"] > 0 and doc["envs"] == 1
+    dataset, cache = tiny_dataset
+    doc = training(2, tmp_path, envs=2, threads=1, episodes=dataset, split="val", cache_dir=cache)
+    assert doc["agent_steps"] > 0 and doc["envs"] == 2
+    assert doc["agent_steps_per_s"] > 0 and doc["agent_steps_per_s_overall"] > 0
+    assert not math.isnan(doc["agent_steps_per_s"])
     split = doc["time_split_seconds"]
     assert {"render", "physics", "env_other", "policy_forward", "update"} <= set(split)
-    assert split["render"] > 0 and split["update"] > 0  # the timed simulators were the ones the env used
+    assert split["render"] > 0 and split["physics"] > 0 and split["update"] > 0  # the timed calls were the ones used
     assert sum(doc["time_split_share_of_loop"].values()) == pytest.approx(1.0, abs=1e-2)
+
+
+def test_batch_renderer_measure_reports_frames_per_second():
+    from main_bench.benchmarks.training import batch_renderer
+
+    doc = batch_renderer(teams=2, calls=2)
+    assert doc["views_per_call"] == 4
+    assert doc["depth_frames_per_s"] > 0 and doc["rgbd_frames_per_s"] > 0
+    assert doc["renderer"].startswith(("gl", "tiny"))

@@ -93,7 +93,9 @@ class BatchRenderer:
         if self.name != "gl":
             start = 0
             for (scene, feet, yaws), n in zip(teams, sizes, strict=True):
-                out_rgb[start:start + n], out_depth[start:start + n] = self._renderer(scene).render(feet, yaws)
+                views, out_depth[start:start + n] = self._renderer(scene).render(feet, yaws)
+                if rgb:
+                    out_rgb[start:start + n] = views
                 start += n
             return out_rgb, out_depth
         for first, last, group in _passes(sizes, self.max_tiles):
