@@ -90,7 +90,7 @@ class MainParallelEnv(ParallelEnv):
                  renderer: str = "auto", image_size: int | None = None, reward: RewardSettings | None = None,
                  max_steps: int | None = None, cache_dir: str | Path | None = None, seed: int = 0,
                  render_mode: str | None = None, message_floats: int = 0,
-                 share_with: MainParallelEnv | None = None) -> None:
+                 share_with: MainParallelEnv | None = None, gpu: int | None = None) -> None:
         from dataclasses import replace
 
         from .episodes.dataset import load_episodes, read_manifest
@@ -131,7 +131,7 @@ class MainParallelEnv(ParallelEnv):
             raise DatasetError(f"no {goal}-goal episodes in split {split!r}", path=episodes)
         self.goal, self.track, self.render_mode = goal, track, render_mode
         self.reward_settings = reward or RewardSettings()
-        sim_settings = sim_settings_from_manifest(self.manifest, renderer)
+        sim_settings = sim_settings_from_manifest(self.manifest, renderer, gpu)
         if image_size is not None:
             sim_settings = replace(sim_settings, camera=replace(sim_settings.camera, width=int(image_size),
                                                                 height=int(image_size)))

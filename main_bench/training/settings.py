@@ -9,6 +9,10 @@ from ..errors import InputError
 from .model import ALGOS, COMM_ALGOS
 from .ppo import PPOSettings
 
+#: The PPO settings `train run` uses by default: they learn on 2 CPU cores within the README's budget
+#: (docs/training.md, "Defaults"); `PPOSettings()` holds the paper's.
+LEARNING_PPO = PPOSettings(lr=7e-4, epochs=2, found_aux=1.0)
+
 #: Algorithms trained on the team's own reward per agent; the others share the team reward (sum over agents).
 OWN_REWARD = ("multi-ppo",)
 
@@ -17,7 +21,9 @@ OWN_REWARD = ("multi-ppo",)
 class TrainSettings:
     """A training run. `rollout` steps per update for each of `num_envs` sub-environments of `agents` agents;
     stops after `updates` updates or `max_minutes` of wall time, whichever first; checkpoints every
-    `checkpoint_every` updates. Images are `image_size` pixels square (depth, plus RGB with `use_rgb`)."""
+    `checkpoint_every` updates. Images are `image_size` pixels square (depth, plus RGB with `use_rgb`). The
+    defaults are those that learn on 2 CPU cores (docs/training.md, "Defaults"): training episodes cut at 200
+    steps, no step penalty, a success bonus of 10, `LEARNING_PPO`."""
 
     episodes: str
     algo: str = "ippo"
@@ -28,24 +34,27 @@ class TrainSettings:
     track: str = "gps"
     image_size: int = 64
     use_rgb: bool = False
-    num_envs: int = 4
+    num_envs: int = 8
     workers: int = 2
     backend: str = "process"
     rollout: int = 64
-    updates: int = 100
+    updates: int = 100_000
     max_minutes: float = 0.0
-    checkpoint_every: int = 10
+    checkpoint_every: int = 5
     seed: int = 0
     device: str = "cpu"
     hidden: int = 128
     features: int = 128
-    max_steps: int | None = None
+    max_steps: int | None = 200
     renderer: str = "auto"
     found_penalty: float = 0.0
     cache_dir: str | None = None
-    step_penalty: float = 0.01
-    success_bonus: float = 2.5
-    ppo: PPOSettings = field(default_factory=PPOSettings)
+    step_penalty: float = 0.0
+    success_bonus: float = 10.0
+    ppo: PPOSettings = field(default_factory=lambda: LEARNING_PPO)
+    #: The EGL device the sampler renders on; None: the CUDA device's index with `device` cuda[:K], else EGL's
+    #: default display.
+    gpu: int | None = None
 
     def __post_init__(self) -> None:
         if self.algo not in ALGOS:
@@ -55,8 +64,21 @@ class TrainSettings:
         for name in ("agents", "num_envs", "rollout", "updates", "checkpoint_every", "image_size"):
             if int(getattr(self, name)) < 1:
                 raise InputError(f"--{name.replace('_', '-')} must be at least 1, got {getattr(self, name)}")
+        if self.gpu is not None and not (isinstance(self.gpu, int) and self.gpu >= 0):
+            raise InputError(f"--gpu must be an EGL device index (0, 1, ...), got {self.gpu!r}")
+        if self.device.startswith("cuda:") and not self.device[5:].isdigit():
+            raise InputError(f"--device must be cpu, cuda or cuda:K, got {self.device!r}")
         if self.workers < 0:
             raise InputError(f"--workers must be 0 or more, got {self.workers}")
+
+    @property
+    def render_device(self) -> int | None:
+        """The EGL device index the sampler renders on: `gpu`, else K of `device` cuda:K (0 for cuda), else None."""
+        if self.gpu is not None:
+            return int(self.gpu)
+        if self.device.startswith("cuda"):
+            return int(self.device.partition(":")[2] or 0)
+        return None
 
     @property
     def mode(self) -> str:

@@ -68,7 +68,8 @@ def vec_spec(settings: TrainSettings, seed: int) -> VecSpec:
                    image_size=settings.image_size, use_rgb=settings.use_rgb, message_floats=cfg.message_floats,
                    seed=seed, max_steps=settings.max_steps, renderer=settings.renderer,
                    found_penalty=settings.found_penalty, cache_dir=settings.cache_dir,
-                   step_penalty=settings.step_penalty, success_bonus=settings.success_bonus)
+                   step_penalty=settings.step_penalty, success_bonus=settings.success_bonus,
+                   gpu=settings.render_device)
 
 
 class Trainer:

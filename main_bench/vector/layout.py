@@ -47,6 +47,8 @@ class VecSpec:
     step_penalty: float = 0.01
     success_bonus: float = 2.5
     distance_weight: float = 1.0
+    #: The EGL device the sub-environments render on (None: EGL's default display).
+    gpu: int | None = None
 
     def env_seed(self, b: int) -> int:
         """Seed of sub-environment b: depends on the base seed and b only (never on the worker count)."""

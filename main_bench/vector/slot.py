@@ -30,7 +30,7 @@ class SubEnv:
                                    max_steps=spec.max_steps, seed=spec.env_seed(b),
                                    message_floats=spec.message_floats, cache_dir=spec.cache_dir,
                                    reward=RewardSettings(spec.distance_weight, spec.success_bonus, spec.step_penalty),
-                                   share_with=None if share_with is None else share_with.env)
+                                   share_with=None if share_with is None else share_with.env, gpu=spec.gpu)
         self.ids = list(self.env.possible_agents)
         self._episodes = 0
 
