@@ -3,8 +3,9 @@
 Flows in: the trained `Net` and the run's settings. Flows out, in one folder: `policy.py` (`make_policy(root,
 seed)` giving one agent's `AgentPolicy`), `model.py` and `obs.py` (copies of this package's self-contained model
 and observation packing, so the policy process needs only numpy and torch), `weights.pt` (model config and
-state_dict) and `metadata.json` (the exact command, algorithm, evaluation mode, agent-steps, updates, wall time,
-the training data's manifest hash; paths relative to the project root, never the machine's absolute layout).
+state_dict) and `metadata.json` (the exact command, the toolkit's commit, algorithm, evaluation mode,
+agent-steps, updates, wall time, the training data's manifest hash; paths relative to the project root, never
+the machine's absolute layout).
 """
 
 from __future__ import annotations
@@ -45,8 +46,9 @@ def make_policy(root, seed=0):
 
 
 def write_submission(folder: str | Path, net: Any, settings: Any, command: str, *, agent_steps: int, updates: int,
-                     wall_seconds: float) -> Path:
-    """Write the submission folder (see the module docstring); returns it."""
+                     wall_seconds: float, commit: str = "") -> Path:
+    """Write the submission folder (see the module docstring); returns it. `commit`: the toolkit's commit the
+    run trained with (`leaderboard.provenance.toolkit_commit`)."""
     import torch
 
     folder = Path(folder)
@@ -63,7 +65,8 @@ def write_submission(folder: str | Path, net: Any, settings: Any, command: str, 
     root = project_root()
     plain = settings.to_dict()
     atomic_write_json(folder / "metadata.json", {
-        "schema_version": METADATA_VERSION, "command": portable_command(command, root), "algo": settings.algo,
+        "schema_version": METADATA_VERSION, "command": portable_command(command, root), "commit": commit,
+        "algo": settings.algo,
         "mode": settings.mode, "agent_steps": int(agent_steps), "updates": int(updates),
         "wall_seconds": round(float(wall_seconds), 1), "model": net.config.to_dict(),
         "settings": {**plain, "episodes": portable_path(settings.episodes, root),
@@ -91,4 +94,4 @@ def export_checkpoint(run_dir: str | Path, folder: str | Path, command: str = ""
     settings = TrainSettings(**{**state["settings"], "ppo": PPOSettings(**state["settings"]["ppo"])})
     return write_submission(folder, net, settings, command or f"checkpoint of {run_dir}",
                             agent_steps=state["agent_steps"], updates=state["update"],
-                            wall_seconds=state["wall_seconds"])
+                            wall_seconds=state["wall_seconds"], commit=str(state.get("commit", "")))

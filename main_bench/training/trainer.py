@@ -79,9 +79,12 @@ class Trainer:
                  progress: Callable[[str], None] | None = None) -> None:
         import torch
 
+        from ..leaderboard.provenance import toolkit_commit
         from .model import Net
 
         self.settings, self.run_dir, self.command = settings, Path(run_dir), command
+        #: The code this process trains with (a resumed run records the commit it resumed on).
+        self.commit = toolkit_commit()
         self.progress = progress
         self.run_dir.mkdir(parents=True, exist_ok=True)
         if settings.device.startswith("cuda") and not torch.cuda.is_available():
@@ -132,7 +135,8 @@ class Trainer:
         state = {"version": CHECKPOINT_VERSION, "config": model_config(self.settings).to_dict(),
                  "settings": self.settings.to_dict(), "model": self.net.state_dict(),
                  "optimizer": self.optimizer.state_dict(), "update": self.update, "agent_steps": self.agent_steps,
-                 "episodes": self.episodes, "wall_seconds": wall, "window": [w.tolist() for w in self.window]}
+                 "episodes": self.episodes, "wall_seconds": wall, "window": [w.tolist() for w in self.window],
+                 "commit": self.commit}
         buffer = io.BytesIO()
         torch.save(state, buffer)
         atomic_write_bytes(self.run_dir / CHECKPOINT, buffer.getvalue())
@@ -198,7 +202,7 @@ class Trainer:
         self.checkpoint(self.wall_before + wall)
         sub = write_submission(self.run_dir / "submission", self.net, s, self.command,
                                agent_steps=self.agent_steps, updates=self.update,
-                               wall_seconds=self.wall_before + wall)
+                               wall_seconds=self.wall_before + wall, commit=self.commit)
         return TrainSummary(updates=self.update, agent_steps=self.agent_steps, episodes=self.episodes,
                             wall_seconds=wall, last=self.curve[-1] if self.curve else {}, timing=timing,
                             run_dir=str(self.run_dir), submission=str(sub), resumed_from=self.resumed_from,
