@@ -28,11 +28,13 @@ SUBMISSION_FILES = ("policy.py", "model.py", "obs.py", "weights.pt", "metadata.j
 RUN_FILES = ("curve.csv", "curve.png")
 
 
-def _main_bench(args: list[str]) -> int:
+def _main_bench(args: list[str], what: Path) -> None:
+    """Run `main-bench args`; a failure stops the campaign with one line naming `what` it was for."""
     exe = shutil.which("main-bench")
     command = [exe, *args] if exe else [sys.executable, "-m", "main_bench.cli.app", *args]
     print("$ main-bench " + " ".join(args), flush=True)
-    return subprocess.run(command, check=False).returncode
+    if subprocess.run(command, check=False).returncode != 0:
+        raise InputError(f"{what}: main-bench {args[0]} failed; see its output above")
 
 
 def _scored(campaign: Campaign, name: str) -> bool:
@@ -55,17 +57,18 @@ def train(campaign: Campaign, only: list[str], max_minutes: float) -> None:
         if max_minutes and left <= 0.5:
             break
         args = campaign.train_args(cell) + (["--max-minutes", f"{left:.1f}"] if max_minutes else [])
-        if _main_bench(args) != 0:
-            raise InputError(f"{campaign.run_dir(cell)}: training failed; see its output above")
+        _main_bench(args, campaign.run_dir(cell))
 
 
 def evaluate(campaign: Campaign) -> None:
     for cell in campaign.cells():
         if campaign.finished(cell) and not _scored(campaign, cell.name):
-            _main_bench(campaign.evaluate_args(cell.name, str(campaign.run_dir(cell) / "submission"), cell.agents))
+            _main_bench(campaign.evaluate_args(cell.name, str(campaign.run_dir(cell) / "submission"), cell.agents),
+                        campaign.results_dir(cell.name))
     for n in sorted({c.agents for c in campaign.cells() if campaign.finished(c)}):
         if not _scored(campaign, f"random-n{n}"):
-            _main_bench(campaign.evaluate_args(f"random-n{n}", "baseline:random", n))
+            _main_bench(campaign.evaluate_args(f"random-n{n}", "baseline:random", n),
+                        campaign.results_dir(f"random-n{n}"))
 
 
 def publish(campaign: Campaign, out: Path) -> None:

@@ -81,15 +81,13 @@ def paper_rows(runs: Sequence[PaperRun], reference: str = "ippo",
     out = []
     for n in sizes:
         by_algo = {a: [r for r in runs if r.algo == a and (r.loaded.records["agents"] == n).any()] for a in order}
+        records = {a: _rows_of(mine, n) for a, mine in by_algo.items() if mine}
         ref_team = None
-        if by_algo.get(reference):
-            rows = _rows_of(by_algo[reference], n)
+        if reference in records:
+            rows = records[reference]
             ref_team = _team_spl_by_episode(rows[rows["agent_index"] == TEAM])
-        for algo in order:
+        for algo, rows in records.items():
             mine = by_algo[algo]
-            if not mine:
-                continue
-            rows = _rows_of(mine, n)
             agents_rows, team = rows[rows["agent_index"] != TEAM], rows[rows["agent_index"] == TEAM]
             key = f"table2/{algo}/{n}"
             clusters = (team["task"].astype(str) + "/" + team["episode_id"].astype(str)).to_numpy()

@@ -50,7 +50,8 @@ class BatchSim:
     def step(self, arrays: dict[str, np.ndarray], rows: list[int] | None = None) -> None:
         """Step every sub-environment (or those of `rows`) with its rows of `actions` (and `messages`), then
         write their observations."""
-        envs = self.envs if rows is None else [env for env in self.envs if env.b in set(rows)]
+        chosen = None if rows is None else set(rows)
+        envs = self.envs if chosen is None else [env for env in self.envs if env.b in chosen]
         for env in envs:
             env.step_state(arrays)
         self._observe(arrays, envs)
