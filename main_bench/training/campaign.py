@@ -5,7 +5,7 @@ Every run trains with `train run`'s defaults (the small configuration: gps track
 B = 8, 64-step rollouts) on the same data and the same agent-step budget, and is scored with `evaluate` on the
 same val split with the mode and track its submission records. The seven algorithms train with teams of 2 on
 seed 0; IPPO and `comm` (the communicating variant compared with it, Comm-RM by default, the paper's best)
-also train on seeds 1 and 2, and with teams of 3. Runs are resumable (`train run` resumes from its
+also train with teams of 3, and on seeds 1 and 2. Runs are resumable (`train run` resumes from its
 checkpoint), so the campaign can stop and go on in later sittings: `python tools/table2.py train` trains what
 is not finished, `evaluate` scores what is trained, `publish` writes the board.
 """
@@ -44,18 +44,19 @@ class Campaign:
 
     episodes: str = "data/sample-points"
     root: str = "runs/table2"
-    agent_steps: int = 2_000_000
+    agent_steps: int = 1_500_000
     comm: str = "comm-rm"
     seeds: tuple[int, ...] = (0, 1, 2)
     train_split: str = "train"
     eval_split: str = "val"
 
     def cells(self) -> list[Cell]:
-        """Every run, in training order: all seven at 2 agents (seed 0), the other seeds of IPPO and `comm`,
-        then both at 3 agents (every seed)."""
-        out = [Cell(a, 2, 0) for a in ALGOS]
-        out += [Cell(a, 2, s) for a in ("ippo", self.comm) for s in self.seeds[1:]]
-        out += [Cell(a, 3, s) for a in ("ippo", self.comm) for s in self.seeds]
+        """Every run, in training order: all seven at 2 agents (seed 0), IPPO and `comm` at 3 agents (seed 0),
+        then their other seeds at 2 and at 3 agents; so the board has a row for every algorithm and team size
+        before the seeds' spread."""
+        pair = ("ippo", self.comm)
+        out = [Cell(a, 2, 0) for a in ALGOS] + [Cell(a, 3, 0) for a in pair]
+        out += [Cell(a, n, s) for n in (2, 3) for a in pair for s in self.seeds[1:]]
         return out
 
     def updates(self, cell: Cell) -> int:

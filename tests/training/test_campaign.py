@@ -25,6 +25,8 @@ def test_cells_budgets_and_commands():
     assert {(x.algo, x.seed) for x in cells if x.agents == 2 and x.seed} == {(a, s) for a in ("ippo", "comm-v")
                                                                            for s in (1, 2)}
     assert len({x.name for x in cells}) == len(cells)
+    # every algorithm and team size of the board before any second seed
+    assert [x.seed for x in cells[:9]] == [0] * 9 and {x.agents for x in cells[7:9]} == {3}
     for cell in cells:  # the same agent-step budget whatever the team size
         assert c.updates(cell) * ROLLOUT * ENVS * cell.agents >= c.agent_steps
         assert (c.updates(cell) - 1) * ROLLOUT * ENVS * cell.agents < c.agent_steps

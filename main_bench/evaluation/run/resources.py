@@ -20,15 +20,49 @@ from ..play.episode_loop import target_key
 #: miss; results do not depend on this). A field is counted as made: 65 bytes per navmesh cell with its open
 #: propagation's state (look-ups settle it only as far as they need), 24 once complete; a built-in house's is 2.6 MiB.
 FIELD_CACHE_MIB = 256
-#: Scenes whose simulators are kept (least recently used closed first): switching back to one costs nothing.
+#: Simulators kept per `EpisodeResources` (the one in use included; least recently released closed first):
+#: switching back to a kept scene costs nothing. Siblings pool theirs, so together they keep this many each.
 SIM_CACHE = 4
 #: Extra clearance (metres) of the navmesh the privileged baselines plan on, so their paths keep off walls.
 PLAN_MARGIN = 0.1
 
 
+class SimulatorPool:
+    """Idle simulators, by scene, of a group of `EpisodeResources` (one, or siblings): each member holds at most
+    one simulator at a time and releases it here when it moves to another scene, so a member starting an episode
+    in a scene another member has left takes that simulator instead of building one (a pybullet world). At most
+    (SIM_CACHE - 1) idle ones per member are kept, least recently released closed first; a simulator's state
+    is reset by every episode (`Simulator.reset` with the episode's seed), so which one is taken never changes
+    results."""
+
+    def __init__(self) -> None:
+        self.members = 0
+        self._idle: list[tuple[str, Any]] = []  # (scene id, simulator), least recently released first
+
+    def take(self, scene_id: str) -> Any | None:
+        """The most recently released idle simulator of `scene_id`, removed from the pool; None if none."""
+        for k in range(len(self._idle) - 1, -1, -1):
+            if self._idle[k][0] == scene_id:
+                return self._idle.pop(k)[1]
+        return None
+
+    def give(self, scene_id: str, sim: Any) -> None:
+        """Keep `sim` (of `scene_id`) idle; close the least recently released beyond the pool's capacity."""
+        self._idle.append((scene_id, sim))
+        while len(self._idle) > (SIM_CACHE - 1) * max(self.members, 1):
+            self._idle.pop(0)[1].close()
+
+    def close(self) -> None:
+        """Close every idle simulator."""
+        for _, sim in self._idle:
+            sim.close()
+        self._idle.clear()
+
+
 class EpisodeResources:
-    """Loads and caches, for one data set: scenes with their navmeshes, one `Simulator` per scene (the
-    `SIM_CACHE` most recently used are kept), and each target's distance field. `close()` when done."""
+    """Loads and caches, for one data set: scenes with their navmeshes, one `Simulator` at a time (the ones it
+    leaves kept idle in its `SimulatorPool`, shared with its siblings), and each target's distance field.
+    `close()` when done."""
 
     def __init__(self, manifest: Any, sim_settings: Any, cache_dir: Path | None = None, seed: int = 0) -> None:
         self.manifest = manifest
@@ -37,16 +71,21 @@ class EpisodeResources:
         self.seed = int(seed)
         self._scenes: dict[str, tuple[Any, Any]] = {}
         self._plan_navmeshes: dict[str, Any] = {}
-        self._sims: OrderedDict[str, Any] = OrderedDict()
+        self._pool = SimulatorPool()
+        self._pool.members += 1
+        self._sim: tuple[str, Any] | None = None  # (scene id, simulator) in use
+        self._closed = False
         self._fields: OrderedDict[tuple, Any] = OrderedDict()
         self._field_sizes: dict[tuple, int] = {}
 
     def sibling(self, seed: int) -> EpisodeResources:
         """Resources of the same data set and settings that share this one's scenes, navmeshes and target fields
-        (loaded once for both) but keep simulators of their own (a simulator holds one team's state), seeded with
-        `seed`."""
+        (loaded once for both) and pool the simulators they are not using (a simulator in use holds one team's
+        state), seeded with `seed`."""
         other = EpisodeResources(self.manifest, self.sim_settings, self.cache_dir, seed)
         other._scenes, other._plan_navmeshes = self._scenes, self._plan_navmeshes
+        other._pool = self._pool
+        self._pool.members += 1
         other._fields, other._field_sizes = self._fields, self._field_sizes
         return other
 
@@ -70,17 +109,22 @@ class EpisodeResources:
         return Path(default_cache_dir()) / "navmesh"
 
     def simulator(self, scene_id: str) -> Any:
-        """The `Simulator` of `scene_id` (for any team size: `Simulator.reset` places the episode's agents)."""
-        if scene_id in self._sims:
-            self._sims.move_to_end(scene_id)
-        else:
+        """The `Simulator` of `scene_id` (for any team size: `Simulator.reset` places the episode's agents). The
+        one this returned before is released to the pool unless it is of the same scene, which is returned
+        again: use one at a time."""
+        if self._sim is not None and self._sim[0] == scene_id:
+            return self._sim[1]
+        if self._sim is not None:
+            self._pool.give(*self._sim)
+            self._sim = None
+        sim = self._pool.take(scene_id)
+        if sim is None:
             from ...sim import Simulator
 
             scene, navmesh = self.scene(scene_id)
-            self._sims[scene_id] = Simulator(scene, navmesh, self.sim_settings, seed=self.seed)
-            while len(self._sims) > SIM_CACHE:
-                self._sims.popitem(last=False)[1].close()
-        return self._sims[scene_id]
+            sim = Simulator(scene, navmesh, self.sim_settings, seed=self.seed)
+        self._sim = (scene_id, sim)
+        return sim
 
     def _plan_navmesh(self, scene_id: str) -> Any:
         """The privileged baselines' planning navmesh: the data set's, eroded by `PLAN_MARGIN` more."""
@@ -128,10 +172,16 @@ class EpisodeResources:
         return out
 
     def close(self) -> None:
-        """Close the simulators."""
-        for sim in self._sims.values():
-            sim.close()
-        self._sims.clear()
+        """Close the simulator in use; the last member of a pool to close closes its idle ones."""
+        if self._closed:
+            return
+        self._closed = True
+        if self._sim is not None:
+            self._sim[1].close()
+            self._sim = None
+        self._pool.members -= 1
+        if self._pool.members <= 0:
+            self._pool.close()
 
 
 def _nbytes(field: Any) -> int:
