@@ -72,8 +72,9 @@ def evaluate(campaign: Campaign) -> None:
 
 
 def publish(campaign: Campaign, out: Path) -> None:
-    from main_bench.io import atomic_write_json, atomic_write_text
-    from main_bench.leaderboard.paper_table import PaperRun, paper_markdown, paper_rows
+    from main_bench.io import atomic_write_bytes, atomic_write_json, atomic_write_text
+    from main_bench.leaderboard.paper_table import PaperRun, paper_markdown, paper_rows, sub_task_markdown
+    from main_bench.leaderboard.plots import sub_task_bars
     from main_bench.leaderboard.submissions import load_submission
 
     runs: list[PaperRun] = []
@@ -96,12 +97,20 @@ def publish(campaign: Campaign, out: Path) -> None:
                         dirs_exist_ok=True)
     rows = paper_rows(runs)
     figures = plot_fig5(campaign, out)
+    sub_tasks = sub_task_bars(rows)
+    atomic_write_bytes(out / f"{sub_tasks.name}.png", sub_tasks.png)
+    atomic_write_text(out / f"{sub_tasks.name}.csv", sub_tasks.csv_text())
+    missing = [c.name for c in campaign.cells() if c not in cells]
     atomic_write_json(out / "table2.json", {"schema_version": 1, "agent_steps_per_run": campaign.agent_steps,
                                             "runs": [c.name for c in cells],
+                                            "scored": [{"results": f"results/{Path(r.loaded.submission.results_dir).name}",
+                                                        "algo": r.algo, "seed": r.seed} for r in runs],
                                             "rows": [{"algo": r.algo, "agents": r.agents, "mode": r.mode,
                                                       "seeds": list(r.seeds), "episodes": r.episodes,
                                                       **r.paper, "team_success": r.team_success.mean,
-                                                      "team_spl": r.team_spl.mean} for r in rows]})
+                                                      "team_spl": r.team_spl.mean,
+                                                      "team_success_by_task": {t: e.mean for t, e in r.by_task.items()}}
+                                                     for r in rows]})
     atomic_write_text(out / "README.md", "\n".join([
         "# MAIN Table 2, reproduced with intervals", "",
         f"Each run: `train run` defaults, {campaign.agent_steps:,} agent-steps, data `{campaign.episodes}`; scored "
@@ -111,7 +120,14 @@ def publish(campaign: Campaign, out: Path) -> None:
         "95% episode-bootstrap intervals and the Wilson interval; the last column is the paired bootstrap of team "
         "SPL against IPPO over the same episodes.", "",
         paper_markdown(rows), "",
-        *[f"![{f.stem}]({f.name})" for f in figures], ""]))
+        f"Runs on this page: {len(cells)} of the campaign's {len(campaign.cells())}"
+        + (f"; not yet trained and scored: {', '.join(missing)}." if missing else "."), "",
+        "## Fig. 5", "",
+        "(a) team success during training per algorithm, teams of 2; (b) IPPO and the communicating variant with "
+        "teams of 2 and 3 (training curves: the last 50 training episodes, mean over the seeds run); (c) team "
+        "success on shared against individual targets on the val split:", "",
+        *[f"![{f.stem}]({f.name})" for f in figures], "", f"![{sub_tasks.name}]({sub_tasks.name}.png)", "",
+        sub_task_markdown(rows), ""]))
 
 
 def main() -> None:

@@ -9,6 +9,7 @@ pure function of the records:
   success region; fractions), every seed's episodes pooled.
 - Team success and team SPL: means over team rows with 95% bootstrap intervals that resample episodes (a seed's
   repeat of an episode stays with it: `cluster_bootstrap_ci`), and the Wilson interval for success.
+- Sub-tasks: team success on each sub-task (shared, individual) with its 95% interval, for Fig. 5(c).
 - Seed spread: the team success of each seed's run, when there are several.
 - Versus the reference: the paired bootstrap of team SPL over the episodes both rows were scored on (each
   episode's value averaged over seeds first), "significant" when the 95% interval excludes 0.
@@ -56,6 +57,8 @@ class PaperRow:
     team_spl: Estimate
     seed_success: tuple[float, ...]
     versus: PairedDifference | None
+    #: team success per sub-task ("individual", "shared"), over that sub-task's episodes
+    by_task: dict[str, Estimate]
 
 
 def _rows_of(runs: Sequence[PaperRun], agents: int) -> pd.DataFrame:
@@ -103,8 +106,15 @@ def paper_rows(runs: Sequence[PaperRun], reference: str = "ippo",
                 team_success=estimate(team["success"].astype(float).to_numpy(), settings, key, "team:success", clusters),
                 team_spl=estimate(team["spl"].astype(float).to_numpy(), settings, key, "team:spl", clusters),
                 seed_success=tuple(float(team[team["seed"] == s]["success"].astype(float).mean()) for s in seeds),
-                versus=versus))
+                versus=versus, by_task=_by_task(team, clusters, settings, key)))
     return out
+
+
+def _by_task(team: pd.DataFrame, clusters: np.ndarray, settings: TableSettings, key: str) -> dict[str, Estimate]:
+    tasks = team["task"].astype(str).to_numpy()
+    success = team["success"].astype(float).to_numpy()
+    return {task: estimate(success[tasks == task], settings, f"{key}/{task}", "team:success", clusters[tasks == task])
+            for task in sorted(set(tasks))}
 
 
 def _versus_cell(row: PaperRow, reference: str) -> str:
@@ -133,4 +143,16 @@ def paper_markdown(rows: Sequence[PaperRow], reference: str = "ippo") -> str:
                  fraction(r.paper["spl"]), f"{fraction(ts.mean)} [{fraction(ts.lo)}, {fraction(ts.hi)}]{wilson}",
                  f"{fraction(tp.mean)} [{fraction(tp.lo)}, {fraction(tp.hi)}]", spread, _versus_cell(r, reference)]
         lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def sub_task_markdown(rows: Sequence[PaperRow]) -> str:
+    """Team success per sub-task and row, with 95% bootstrap intervals, as Markdown (Fig. 5(c)'s numbers)."""
+    tasks = sorted({t for r in rows for t in r.by_task})
+    lines = ["| Algorithm | N | " + " | ".join(f"team success, {t} [95% CI]" for t in tasks) + " |",
+             "|:---|---:|" + "---:|" * len(tasks)]
+    for r in rows:
+        cells = [f"{fraction(e.mean)} [{fraction(e.lo)}, {fraction(e.hi)}]" if (e := r.by_task.get(t)) else "–"
+                 for t in tasks]
+        lines.append(f"| {r.algo} | {r.agents} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

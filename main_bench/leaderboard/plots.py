@@ -14,6 +14,7 @@ import pandas as pd  # noqa: E402
 
 from ..stats.figures import png_bytes  # noqa: E402
 from .format import fmt_value  # noqa: E402
+from .paper_table import PaperRow  # noqa: E402
 from .report import Figure  # noqa: E402
 from .submissions import LoadedSubmission  # noqa: E402
 from .tables import TableSettings, TrackTable, estimate  # noqa: E402
@@ -228,3 +229,34 @@ def section_figures(subs: list[LoadedSubmission], tracks: list[TrackTable], sett
         scene_heatmap(subs, "spl"),
         agents_breakdown(tracks, names),
     )
+
+
+def sub_task_bars(rows: list[PaperRow]) -> Figure:
+    """Fig. 5(c) of the MAIN paper: team success on shared against individual targets per algorithm, one panel
+    per team size, with 95% episode-bootstrap intervals."""
+    sizes = sorted({r.agents for r in rows})
+    tasks = sorted({t for r in rows for t in r.by_task})
+    colors = _colors(tasks)
+    fig, axes = plt.subplots(1, len(sizes), figsize=(max(4.8, 1.2 * max(len(rows), 4)) * len(sizes) / 1.5, 3.8),
+                             squeeze=False)
+    width = 0.8 / max(len(tasks), 1)
+    for ax, n in zip(axes[0], sizes, strict=True):
+        mine = [r for r in rows if r.agents == n]
+        for k, task in enumerate(tasks):
+            xs = np.arange(len(mine)) + (k - (len(tasks) - 1) / 2) * width
+            est = [r.by_task.get(task) for r in mine]
+            m = np.array([np.nan if e is None else e.mean for e in est])
+            lo = np.array([0.0 if e is None else e.mean - e.lo for e in est])
+            hi = np.array([0.0 if e is None else e.hi - e.mean for e in est])
+            ax.bar(xs, m, width, yerr=[lo, hi], capsize=3, color=colors[task], label=f"{task} target")
+        ax.set_xticks(np.arange(len(mine)), [_plain(r.algo) for r in mine], rotation=30, fontsize=8)
+        ax.set_ylabel("team success (fraction)")
+        ax.set_ylim(0.0, 1.0)
+        ax.set_title(f"teams of {n}", fontsize=10)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    table = pd.DataFrame([{"algo": r.algo, "agents": r.agents, "task": t, "mean": e.mean, "ci_low": e.lo,
+                           "ci_high": e.hi} for r in rows for t, e in r.by_task.items()])
+    return Figure("fig5c_sub_tasks", "Team success on shared against individual targets, with 95% "
+                  "episode-bootstrap intervals (val split).", png_bytes(fig), table)

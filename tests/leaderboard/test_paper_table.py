@@ -10,7 +10,8 @@ import pytest
 from lb_fixtures import episodes_dir, make_results  # noqa: F401  (episodes_dir is a fixture)
 
 from main_bench.evaluation.output.records import TEAM
-from main_bench.leaderboard.paper_table import PaperRun, paper_markdown, paper_rows
+from main_bench.leaderboard.paper_table import PaperRun, paper_markdown, paper_rows, sub_task_markdown
+from main_bench.leaderboard.plots import sub_task_bars
 from main_bench.leaderboard.submissions import load_submission
 from main_bench.numfmt import fraction
 
@@ -81,3 +82,26 @@ def test_markdown_shows_every_rows_numbers(runs):
         else:
             assert cells[12].startswith(f"{row.versus.difference:+.3f} [{row.versus.lo:+.3f}, {row.versus.hi:+.3f}]")
     assert np.isfinite([r.team_spl.mean for r in rows]).all()
+
+
+def test_sub_task_success_is_each_sub_tasks_team_records_and_the_figure_draws_them(runs):
+    rows = paper_rows(runs)
+    for row in rows:
+        pooled = _pooled(runs, row.algo, row.agents)
+        team = pooled[pooled["agent_index"] == TEAM]
+        assert sorted(row.by_task) == sorted(team["task"].unique())
+        for task, est in row.by_task.items():
+            assert est.mean == pytest.approx(team[team["task"] == task]["success"].mean())
+            assert est.lo <= est.mean <= est.hi and est.wilson is not None
+    text = sub_task_markdown(rows)
+    lines = [line for line in text.splitlines() if line.startswith("| ") and not line.startswith("| Algorithm")]
+    tasks = sorted({t for r in rows for t in r.by_task})
+    for line, row in zip(lines, rows, strict=True):
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert cells[:2] == [row.algo, str(row.agents)]
+        for cell, task in zip(cells[2:], tasks, strict=True):
+            e = row.by_task[task]
+            assert cell == f"{fraction(e.mean)} [{fraction(e.lo)}, {fraction(e.hi)}]"
+    figure = sub_task_bars(rows)
+    assert figure.png.startswith(b"\x89PNG") and len(figure.table) == sum(len(r.by_task) for r in rows)
+    assert figure.table["mean"].tolist() == pytest.approx([e.mean for r in rows for e in r.by_task.values()])

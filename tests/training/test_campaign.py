@@ -66,3 +66,6 @@ def test_table2_tool_trains_scores_and_publishes(tiny_dataset, tmp_path):
     assert (board / "submissions" / "comm-rm-n2-s0" / "weights.pt").is_file()
     assert not list(board.rglob("checkpoint.pt"))
     assert (board / "fig5a_algorithms.png").stat().st_size > 1000
+    assert (board / "fig5c_sub_tasks.png").stat().st_size > 1000 and "fig5c_sub_tasks.png" in page
+    assert "Runs on this page: 2 of the campaign's 17; not yet trained and scored: multi-ppo-n2-s0" in page
+    assert set(doc["rows"][0]["team_success_by_task"]) == {"individual", "shared"}
