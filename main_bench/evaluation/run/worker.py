@@ -1,7 +1,7 @@
 """A worker: runs chunks of episodes and writes their part files. One `WorkerContext` per worker process.
 
 The context keeps what is expensive to rebuild between chunks of the same worker: loaded scenes and navmeshes,
-one simulator per scene, the target distance fields, and the policy (a privileged baseline in this process, or
+the simulators of recent scenes, the target distance fields, and the policy (a privileged baseline in this process, or
 a submission in its own `PolicyProcess`). Nothing it keeps changes results: every episode starts from the
 data set's start state, the policy is reset with a seed from (evaluation seed, episode id).
 """
