@@ -96,7 +96,7 @@ def publish(campaign: Campaign, out: Path) -> None:
         shutil.copytree(run.loaded.submission.results_dir, out / "results" / Path(run.loaded.submission.results_dir).name,
                         dirs_exist_ok=True)
     rows = paper_rows(runs)
-    figures = plot_fig5(campaign, out)
+    figures = plot_fig5(campaign, out, cells)
     sub_tasks = sub_task_bars(rows)
     atomic_write_bytes(out / f"{sub_tasks.name}.png", sub_tasks.png)
     atomic_write_text(out / f"{sub_tasks.name}.csv", sub_tasks.csv_text())
@@ -113,7 +113,9 @@ def publish(campaign: Campaign, out: Path) -> None:
                                                      for r in rows]})
     atomic_write_text(out / "README.md", "\n".join([
         "# MAIN Table 2, reproduced with intervals", "",
-        f"Each run: `train run` defaults, {campaign.agent_steps:,} agent-steps, data `{campaign.episodes}`; scored "
+        f"Each run: `train run` defaults, the same budget of {campaign.agent_steps:,} agent-step slots (updates x "
+        "64 steps x 8 sub-environments x N agents; an agent whose part of an episode is over leaves its slot idle, "
+        f"so the agent-steps taken are fewer, listed below), data `{campaign.episodes}`; scored "
         "on its val split (`python tools/table2.py publish` wrote this page; docs/paper.md compares it with the "
         "paper).", "",
         "Length in steps, Distance in metres, Success and SPL as fractions (means over agents); team metrics with "
@@ -122,6 +124,7 @@ def publish(campaign: Campaign, out: Path) -> None:
         paper_markdown(rows), "",
         f"Runs on this page: {len(cells)} of the campaign's {len(campaign.cells())}"
         + (f"; not yet trained and scored: {', '.join(missing)}." if missing else "."), "",
+        "Each run's command is in its `submissions/<run>/metadata.json`:", "", campaign.runs_markdown(cells), "",
         "## Fig. 5", "",
         "(a) team success during training per algorithm, teams of 2; (b) IPPO and the communicating variant with "
         "teams of 2 and 3 (training curves: the last 50 training episodes, mean over the seeds run); (c) team "

@@ -60,8 +60,24 @@ class Campaign:
         return out
 
     def updates(self, cell: Cell) -> int:
-        """PPO updates that give the budget: each update is ROLLOUT x ENVS x N agent-steps."""
+        """PPO updates that give the budget: each update is ROLLOUT x ENVS x N agent-step slots (an agent whose
+        episode part is over leaves its slot idle until its team's episode ends, so the agent-steps taken are
+        fewer: every run gets the same number of team steps)."""
         return math.ceil(self.agent_steps / (ROLLOUT * ENVS * cell.agents))
+
+    def runs_markdown(self, cells: list[Cell]) -> str:
+        """A Markdown table of the trained runs from their submissions' metadata: updates, agent-step slots,
+        agent-steps taken, training wall time and the toolkit commit that finished the run."""
+        import json
+
+        lines = ["| run | updates | agent-step slots | agent-steps taken | wall time (h) | commit |",
+                 "|:---|---:|---:|---:|---:|:---|"]
+        for cell in cells:
+            meta = json.loads((self.run_dir(cell) / "submission" / "metadata.json").read_text())
+            slots = int(meta["updates"]) * ROLLOUT * ENVS * cell.agents
+            lines.append(f"| {cell.name} | {meta['updates']} | {slots:,} | {int(meta['agent_steps']):,} | "
+                         f"{float(meta['wall_seconds']) / 3600:.2f} | {meta.get('commit', '')} |")
+        return "\n".join(lines)
 
     def run_dir(self, cell: Cell) -> Path:
         """Where the run trains."""
@@ -80,8 +96,9 @@ class Campaign:
 
     def evaluate_args(self, name: str, agent: str, agents: int) -> list[str]:
         """The `main-bench` arguments that score `agent` on the evaluation split with teams of `agents` into `name`'s
-        results (mode and track: the submission's own, or gps for a baseline)."""
-        extra = ["--track", "gps"] if agent.startswith("baseline:") else []
+        results (mode and track: the submission's own; a baseline plays the trained runs' track, gps, in `silent`
+        mode, each agent on its own like IPPO's)."""
+        extra = ["--track", "gps", "--mode", "silent"] if agent.startswith("baseline:") else []
         return ["evaluate", "--episodes", self.episodes, "--split", self.eval_split, "--agents", str(agents),
                 "--agent", agent,
                 "--out", str(self.results_dir(name)), "--workers", "2", *extra]
@@ -96,9 +113,10 @@ class Campaign:
         return self.trained(cell) >= self.updates(cell) and (self.run_dir(cell) / "submission" / "weights.pt").is_file()
 
 
-def plot_fig5(campaign: Campaign, out: Path) -> list[Path]:
-    """Fig. 5 of the paper from the runs' curves: (a) team success against agent-steps per algorithm with teams
-    of 2 (mean over the seeds run), (b) the same for IPPO and `comm` with teams of 2 and 3. PNG files written."""
+def plot_fig5(campaign: Campaign, out: Path, cells: list[Cell] | None = None) -> list[Path]:
+    """Fig. 5 of the paper from the curves of `cells` (default: every run with a curve): (a) team success against
+    agent-steps per algorithm with teams of 2 (mean over the seeds run), (b) the same for IPPO and `comm` with
+    teams of 2 and 3. PNG files written."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -112,7 +130,7 @@ def plot_fig5(campaign: Campaign, out: Path) -> list[Path]:
     for file, series in panels.items():
         fig, ax = plt.subplots(figsize=(6.4, 4.0))
         for algo, n in series:
-            curves = [read_curve(campaign.run_dir(c) / "curve.csv") for c in campaign.cells()
+            curves = [read_curve(campaign.run_dir(c) / "curve.csv") for c in (campaign.cells() if cells is None else cells)
                       if c.algo == algo and c.agents == n]
             curves = [c for c in curves if c]
             if not curves:

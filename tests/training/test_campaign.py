@@ -63,6 +63,7 @@ def test_table2_tool_trains_scores_and_publishes(tiny_dataset, tmp_path):
     assert [r["algo"] for r in doc["rows"]] == ["ippo", "comm-rm", "random"]
     page = (board / "README.md").read_text()
     assert "| comm-rm | 2 | comm |" in page and "| ippo | 2 | silent |" in page and "reference" in page
+    assert "| random | 2 | silent |" in page  # a baseline plays each agent on its own, like IPPO
     assert (board / "submissions" / "comm-rm-n2-s0" / "weights.pt").is_file()
     assert not list(board.rglob("checkpoint.pt"))
     assert (board / "fig5a_algorithms.png").stat().st_size > 1000
