@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from main_bench.errors import InputError, MainBenchError
-from main_bench.training.campaign import Campaign, Cell, plot_fig5
+from main_bench.training.campaign import ENVS, ROLLOUT, Campaign, Cell, plot_fig5
 
 #: What `publish` copies of a run: the submission (a few MB) and its curves, never checkpoints or rollouts.
 SUBMISSION_FILES = ("policy.py", "model.py", "obs.py", "weights.pt", "metadata.json")
@@ -92,9 +92,9 @@ def publish(campaign: Campaign, out: Path) -> None:
     for n in sorted({c.agents for c in cells}):
         if _scored(campaign, f"random-n{n}"):
             runs.append(PaperRun("random", 0, load_submission(campaign.results_dir(f"random-n{n}"))))
-    for run in runs:
-        shutil.copytree(run.loaded.submission.results_dir, out / "results" / Path(run.loaded.submission.results_dir).name,
-                        dirs_exist_ok=True)
+    results = [f"results/{Path(run.loaded.submission.results_dir).name}" for run in runs]
+    for run, folder in zip(runs, results, strict=True):
+        shutil.copytree(run.loaded.submission.results_dir, out / folder, dirs_exist_ok=True)
     rows = paper_rows(runs)
     figures = plot_fig5(campaign, out, cells)
     sub_tasks = sub_task_bars(rows)
@@ -103,8 +103,8 @@ def publish(campaign: Campaign, out: Path) -> None:
     missing = [c.name for c in campaign.cells() if c not in cells]
     atomic_write_json(out / "table2.json", {"schema_version": 1, "agent_steps_per_run": campaign.agent_steps,
                                             "runs": [c.name for c in cells],
-                                            "scored": [{"results": f"results/{Path(r.loaded.submission.results_dir).name}",
-                                                        "algo": r.algo, "seed": r.seed} for r in runs],
+                                            "scored": [{"results": folder, "algo": r.algo, "seed": r.seed}
+                                                       for r, folder in zip(runs, results, strict=True)],
                                             "rows": [{"algo": r.algo, "agents": r.agents, "mode": r.mode,
                                                       "seeds": list(r.seeds), "episodes": r.episodes,
                                                       **r.paper, "team_success": r.team_success.mean,
@@ -114,7 +114,7 @@ def publish(campaign: Campaign, out: Path) -> None:
     atomic_write_text(out / "README.md", "\n".join([
         "# MAIN Table 2, reproduced with intervals", "",
         f"Each run: `train run` defaults, the same budget of {campaign.agent_steps:,} agent-step slots (updates x "
-        "64 steps x 8 sub-environments x N agents; an agent whose part of an episode is over leaves its slot idle, "
+        f"{ROLLOUT} steps x {ENVS} sub-environments x N agents; an agent whose part of an episode is over leaves its slot idle, "
         f"so the agent-steps taken are fewer, listed below), data `{campaign.episodes}`; scored "
         "on its val split (`python tools/table2.py publish` wrote this page; docs/paper.md compares it with the "
         "paper).", "",

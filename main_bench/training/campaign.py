@@ -124,14 +124,14 @@ def plot_fig5(campaign: Campaign, out: Path, cells: list[Cell] | None = None) ->
 
     from ..io import atomic_path
 
+    chosen = campaign.cells() if cells is None else cells
     written = []
     panels = {"fig5a_algorithms.png": [(a, 2) for a in ALGOS],
               "fig5b_team_size.png": [(a, n) for a in ("ippo", campaign.comm) for n in (2, 3)]}
     for file, series in panels.items():
         fig, ax = plt.subplots(figsize=(6.4, 4.0))
         for algo, n in series:
-            curves = [read_curve(campaign.run_dir(c) / "curve.csv") for c in (campaign.cells() if cells is None else cells)
-                      if c.algo == algo and c.agents == n]
+            curves = [read_curve(campaign.run_dir(c) / "curve.csv") for c in chosen if c.algo == algo and c.agents == n]
             curves = [c for c in curves if c]
             if not curves:
                 continue

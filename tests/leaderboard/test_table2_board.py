@@ -13,6 +13,7 @@ import pytest
 
 from main_bench.leaderboard.paper_table import PaperRun, paper_markdown, paper_rows, sub_task_markdown
 from main_bench.leaderboard.submissions import load_submission
+from main_bench.training.campaign import ENVS, ROLLOUT
 
 BOARD = Path(__file__).resolve().parents[2] / "leaderboard" / "table2"
 
@@ -47,8 +48,9 @@ def test_every_run_names_its_command_and_commit_and_all_share_one_split(board):
         assert meta["settings"]["seed"] == int(seed)
         assert meta["command"].startswith("main-bench train run ") and f"--algo {algo} " in meta["command"]
         assert re.search(r"commit [0-9a-f]{7,}", meta["commit"]) or re.fullmatch(r"[0-9a-f]{7,40}", meta["commit"])
-        slots = meta["updates"] * 64 * 8 * int(agents)  # the budget: the same agent-step slots for every run
-        assert doc["agent_steps_per_run"] <= slots < doc["agent_steps_per_run"] + 64 * 8 * int(agents)
+        per_update = ROLLOUT * ENVS * int(agents)
+        slots = meta["updates"] * per_update  # the budget: the same agent-step slots for every run
+        assert doc["agent_steps_per_run"] <= slots < doc["agent_steps_per_run"] + per_update
         assert f"| {name} | {meta['updates']} | {slots:,} | {meta['agent_steps']:,} |" in page
         assert (BOARD / "submissions" / name / "weights.pt").stat().st_size < 8 * 2**20
     splits = {split for run in runs for split in run.loaded.records["split"].unique()}

@@ -64,14 +64,16 @@ class EpisodeResources:
     leaves kept idle in its `SimulatorPool`, shared with its siblings), and each target's distance field.
     `close()` when done."""
 
-    def __init__(self, manifest: Any, sim_settings: Any, cache_dir: Path | None = None, seed: int = 0) -> None:
+    def __init__(self, manifest: Any, sim_settings: Any, cache_dir: Path | None = None, seed: int = 0,
+                 pool: SimulatorPool | None = None) -> None:
+        """`pool`: the `SimulatorPool` to join (a sibling's, see `sibling`); a new one by default."""
         self.manifest = manifest
         self.sim_settings = sim_settings
         self.cache_dir = None if cache_dir is None else Path(cache_dir)
         self.seed = int(seed)
         self._scenes: dict[str, tuple[Any, Any]] = {}
         self._plan_navmeshes: dict[str, Any] = {}
-        self._pool = SimulatorPool()
+        self._pool = SimulatorPool() if pool is None else pool
         self._pool.members += 1
         self._sim: tuple[str, Any] | None = None  # (scene id, simulator) in use
         self._closed = False
@@ -82,10 +84,8 @@ class EpisodeResources:
         """Resources of the same data set and settings that share this one's scenes, navmeshes and target fields
         (loaded once for both) and pool the simulators they are not using (a simulator in use holds one team's
         state), seeded with `seed`."""
-        other = EpisodeResources(self.manifest, self.sim_settings, self.cache_dir, seed)
+        other = EpisodeResources(self.manifest, self.sim_settings, self.cache_dir, seed, pool=self._pool)
         other._scenes, other._plan_navmeshes = self._scenes, self._plan_navmeshes
-        other._pool = self._pool
-        self._pool.members += 1
         other._fields, other._field_sizes = self._fields, self._field_sizes
         return other
 
