@@ -32,6 +32,8 @@ from . import machine_done, machine_info
 from .modes import sample_dataset
 
 GOAL_TRAINING_RATE = 1000.0
+#: The goal on one H100 or H200 with torch on CUDA, at the same settings with more sub-environments and workers.
+GOAL_GPU_TRAINING_RATE = 20_000.0
 
 #: The training measurement's configuration: the shipped run's (B = 8, 2 workers, the trainer on both cores).
 TRAIN_ENVS = 8
@@ -50,15 +52,18 @@ def point_goal_sample() -> Path:
 
 
 def shipped_settings(updates: int, envs: int = TRAIN_ENVS, backend: str = "process", workers: int = 2,
-                     episodes: Path | None = None, split: str = "train", cache_dir: Path | None = None) -> Any:
-    """The `TrainSettings` of the measurement (see the module docstring); another data set for tests."""
+                     episodes: Path | None = None, split: str = "train", cache_dir: Path | None = None,
+                     device: str = "cpu", precision: str = "auto") -> Any:
+    """The `TrainSettings` of the measurement (see the module docstring); another data set for tests; `device`
+    cuda[:K] trains on that CUDA device and renders on the matching EGL device; `precision` the CNN's."""
     from ..training.ppo import PPOSettings
     from ..training.settings import TrainSettings
 
     return TrainSettings(episodes=str(episodes or point_goal_sample()), algo="ippo", goal="point", track="gps",
                          image_size=64, num_envs=envs, workers=workers, backend=backend, rollout=64,
                          updates=updates, checkpoint_every=10_000, ppo=PPOSettings(epochs=2), split=split,
-                         cache_dir=None if cache_dir is None else str(cache_dir))
+                         cache_dir=None if cache_dir is None else str(cache_dir), device=device,
+                         precision=precision)
 
 
 def _rates(trainer: Any, started: float) -> tuple[float, float, Any]:
@@ -73,10 +78,12 @@ def _rates(trainer: Any, started: float) -> tuple[float, float, Any]:
 
 
 def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int = TRAIN_THREADS,
-             episodes: Path | None = None, **data: Any) -> dict[str, Any]:
-    """Trainer throughput (process sampler, steady and overall) and its time split (in-process sampler, timed
-    simulator steps and renders), with `envs` sub-environments and `threads` torch threads in the trainer;
-    `data`: `split` and `cache_dir` of another data set (tests)."""
+             episodes: Path | None = None, device: str = "cpu", workers: int = 2, full_split: bool = True,
+             precision: str = "auto", **data: Any) -> dict[str, Any]:
+    """Trainer throughput (process sampler of `workers` workers, steady and overall), the trainer's own wait
+    split (waiting on the sampler, forward, update) and, with `full_split`, the full time split (in-process sampler,
+    timed simulator steps and renders), with `envs` sub-environments, `threads` torch threads in the trainer and
+    torch on `device`; `data`: `split` and `cache_dir` of another data set (tests)."""
     import torch
 
     from ..sim.render.batch import BatchRenderer
@@ -86,8 +93,17 @@ def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int =
     torch.set_num_threads(threads)
     episodes = episodes or point_goal_sample()
     started = time.perf_counter()
-    fast = Trainer(shipped_settings(updates, envs, episodes=episodes, **data), workdir / "process")
-    steady, overall, _ = _rates(fast, started)
+    fast = Trainer(shipped_settings(updates, envs, episodes=episodes, device=device, workers=workers,
+                                    precision=precision, **data), workdir / "process")
+    steady, overall, summary = _rates(fast, started)
+    waits = summary.timing
+    out: dict[str, Any] = {
+        "agent_steps_per_s": round(steady, 1), "agent_steps_per_s_overall": round(overall, 1),
+        "agent_steps": fast.agent_steps, "updates": updates, "envs": envs, "workers": workers,
+        "torch_threads": threads, "device": _device_name(device), "cnn_bf16": fast.settings.bf16,
+        "trainer_wait_share": {k: round(v / max(sum(waits.values()), 1e-9), 3) for k, v in waits.items()}}
+    if not full_split:
+        return out
 
     totals = {"render": 0.0, "physics": 0.0}
     originals = {"render": BatchRenderer.render, "physics": Simulator.step}
@@ -101,8 +117,8 @@ def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int =
                 totals[key] += time.perf_counter() - t0
         return call
 
-    trainer = Trainer(shipped_settings(updates, envs, backend="inline", workers=0, episodes=episodes, **data),
-                      workdir / "inline")
+    trainer = Trainer(shipped_settings(updates, envs, backend="inline", workers=0, episodes=episodes,
+                                       device=device, precision=precision, **data), workdir / "inline")
     BatchRenderer.render, Simulator.step = timed("render"), timed("physics")  # type: ignore[method-assign]
     try:
         started = time.perf_counter()
@@ -115,17 +131,26 @@ def training(updates: int, workdir: Path, envs: int = TRAIN_ENVS, threads: int =
                "env_other": split.timing["sample"] - totals["render"] - totals["physics"],
                "policy_forward": split.timing["forward"], "update": split.timing["update"]}
     seconds["startup_and_writing"] = total - loop
-    return {"agent_steps_per_s": round(steady, 1), "agent_steps_per_s_overall": round(overall, 1),
-            "agent_steps": fast.agent_steps, "updates": updates, "envs": envs, "workers": 2,
-            "torch_threads": threads, "inline_agent_steps_per_s": round(split.agent_steps / loop, 1),
+    return {**out, "inline_agent_steps_per_s": round(split.agent_steps / loop, 1),
             "time_split_seconds": {k: round(v, 2) for k, v in seconds.items()},
             "time_split_share_of_loop": {k: round(v / loop, 3) for k, v in seconds.items()
                                          if k != "startup_and_writing"}}
 
 
-def batch_renderer(teams: int = TRAIN_ENVS, calls: int = 30, episodes: Path | None = None) -> dict[str, Any]:
+def _device_name(device: str) -> str:
+    """`device` with the CUDA card's name, e.g. 'cuda:0 (NVIDIA H200)'."""
+    if not device.startswith("cuda"):
+        return device
+    import torch
+
+    return f"{device} ({torch.cuda.get_device_name(torch.device(device))})"
+
+
+def batch_renderer(teams: int = TRAIN_ENVS, calls: int = 30, episodes: Path | None = None,
+                   gpu: int | None = None) -> dict[str, Any]:
     """Frames (views) per second of one `BatchRenderer` call for `teams` teams of 2 at their episodes' starts
-    in the train split's scenes: depth only and RGB-D, 64 x 64 (medians over `calls` calls)."""
+    in the train split's scenes: depth only and RGB-D, 64 x 64 (medians over `calls` calls), on EGL device
+    `gpu` (None: the default display)."""
     from dataclasses import replace
 
     from ..episodes.dataset import load_episodes, read_manifest
@@ -142,7 +167,7 @@ def batch_renderer(teams: int = TRAIN_ENVS, calls: int = 30, episodes: Path | No
     team_list = [(resources.scene(e.scene_id)[0], np.asarray(e.start_positions), np.asarray(e.start_yaws))
                  for e in pool]
     renderer = BatchRenderer(camera, "auto", agent_radius=settings.agent_radius,
-                             agent_height=settings.agent_height)
+                             agent_height=settings.agent_height, gpu=gpu)
     out: dict[str, Any] = {"teams": len(team_list), "views_per_call": 2 * len(team_list), "image_size": 64}
     try:
         for name, rgb in (("depth", False), ("rgbd", True)):
@@ -172,16 +197,27 @@ def rollout_memory() -> dict[str, Any]:
             "mib_with_float32_depth": round((compact + 2 * depth_pixels) / 2**20, 1)}
 
 
-def run(quick: bool = False) -> dict[str, Any]:
-    """Every measurement of this module (see its docstring); a JSON-ready dict."""
+def run(quick: bool = False, device: str = "cpu", envs: int = TRAIN_ENVS, workers: int = 2,
+        threads: int = TRAIN_THREADS, updates: int | None = None, precision: str = "auto") -> dict[str, Any]:
+    """Every measurement of this module (see its docstring); a JSON-ready dict. The defaults are the 2-core
+    machine's measurement; on a GPU machine `device` cuda, more `envs` and `workers` (the full time split is then
+    left out: its in-process sampler would measure one core, not the run; the trainer's wait split stays)."""
+    from ..errors import InputError
+
+    if envs < 2 * max(workers, 1):
+        raise InputError(f"--envs {envs}: needs at least 2 sub-environments per worker ({workers} workers)")
     machine = machine_info()
-    updates = 2 if quick else 8
-    out: dict[str, Any] = {"benchmark": "training", "quick": quick,
-                           "goal": {"training_agent_steps_per_s": GOAL_TRAINING_RATE}}
+    updates = updates or (2 if quick else 8)
+    gpu = device.startswith("cuda")
+    goal = GOAL_GPU_TRAINING_RATE if gpu else GOAL_TRAINING_RATE
+    out: dict[str, Any] = {"benchmark": "training", "quick": quick, "goal": {"training_agent_steps_per_s": goal}}
     with tempfile.TemporaryDirectory() as tmp:
-        out["training"] = training(updates, Path(tmp))
-    out["training_meets_goal"] = out["training"]["agent_steps_per_s"] >= GOAL_TRAINING_RATE
-    out["batch_renderer"] = batch_renderer(calls=5 if quick else 30)
+        out["training"] = training(updates, Path(tmp), envs=envs, threads=threads, device=device,
+                                   workers=workers, full_split=not gpu, precision=precision)
+    out["training_meets_goal"] = out["training"]["agent_steps_per_s"] >= goal
+    render_gpu = int(device.partition(":")[2] or 0) if gpu else None
+    out["batch_renderer"] = batch_renderer(teams=max(envs // max(workers, 1), 1), calls=5 if quick else 30,
+                                           gpu=render_gpu)
     out["rollout_memory"] = rollout_memory()
     out["machine"] = machine_done(machine)
     return out
@@ -194,9 +230,11 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
     memory = result["rollout_memory"]
     return [f"{m['cpus']} CPUs; 1-min load {m['load_average_1min_at_start']} at start, "
             f"{m['load_average_1min_at_end']} at end",
-            f"training: {t['agent_steps_per_s']} agent-steps/s steady (goal {GOAL_TRAINING_RATE:.0f}), "
+            f"training on {t['device']}, B={t['envs']} in {t['workers']} workers: {t['agent_steps_per_s']} "
+            f"agent-steps/s steady (goal {result['goal']['training_agent_steps_per_s']:.0f}), "
             f"{t['agent_steps_per_s_overall']} overall; split "
-            + ", ".join(f"{k} {v:.0%}" for k, v in t["time_split_share_of_loop"].items()),
+            + ", ".join(f"{k} {v:.0%}" for k, v in t.get("time_split_share_of_loop",
+                                                          t["trainer_wait_share"]).items()),
             f"batch renderer ({r['renderer']}, {r['views_per_call']} views per call, 64x64): "
             f"{r['depth_frames_per_s']} frames/s depth, {r['rgbd_frames_per_s']} RGB-D",
             f"rollout B=8 N=3 256 steps 64x64 RGB-D: {memory['mib']} MiB ({memory['mib_with_float32_depth']} MiB "

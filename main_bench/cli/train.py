@@ -50,6 +50,8 @@ def run(
     device: str = typer.Option("cpu", "--device", help="cpu, cuda or cuda:K (torch's device)."),
     gpu: int = typer.Option(None, "--gpu", help="EGL device the sampler renders on (default: K of --device "
                             "cuda:K, else EGL's default display)."),
+    precision: str = typer.Option("auto", "--precision", help="The CNN's arithmetic: auto (bf16 autocast on "
+                                  "CUDA, fp32 on the CPU), fp32 or bf16."),
     hidden: int = typer.Option(128, "--hidden", help="GRU width."),
     lr: float = typer.Option(7e-4, "--lr", help="Adam learning rate (the paper's: 2.5e-4)."),
     epochs: int = typer.Option(2, "--epochs", help="PPO epochs per update."),
@@ -79,7 +81,8 @@ def run(
         episodes=str(episodes), algo=algo, split=split, agents=agents, task=None if task == "any" else task,
         goal=goal, track=track, image_size=image_size, use_rgb=rgb, num_envs=num_envs, workers=workers,
         backend=backend, rollout=rollout, updates=updates, max_minutes=max_minutes,
-        checkpoint_every=checkpoint_every, seed=seed, device=device, gpu=gpu, hidden=hidden, features=hidden,
+        checkpoint_every=checkpoint_every, seed=seed, device=device, gpu=gpu, precision=precision,
+        hidden=hidden, features=hidden,
         max_steps=max_steps or None, found_penalty=found_penalty, step_penalty=step_penalty, success_bonus=success_bonus,
         cache_dir=None if cache_dir is None else str(cache_dir), ppo=PPOSettings(lr=lr, epochs=epochs, bptt=bptt,
                                                                      found_aux=found_aux))

@@ -81,6 +81,8 @@ class Net(nn.Module):
     def __init__(self, config: ModelConfig) -> None:
         super().__init__()
         self.config = config
+        #: Run the CNN under bf16 autocast (`TrainSettings.precision`); the rest of the net stays float32.
+        self.bf16 = False
         channels = 4 if config.use_rgb else 1
         size = config.image_size
         # Strided layers (8 x 8 stride 4, then stride 2) shrink the image where it is largest: at 64 x 64, 0.93M
@@ -120,7 +122,9 @@ class Net(nn.Module):
         goal[:, 0] = torch.log1p(goal[:, 0].clamp(min=0.0))
         goal[:, 3:6] = goal[:, 3:6] / 10.0
         image = image.contiguous(memory_format=torch.channels_last)
-        return self.fuse(torch.cat([self.cnn(image), cat, torch.relu(self.goal(goal))], dim=1))
+        with torch.autocast(image.device.type, dtype=torch.bfloat16, enabled=self.bf16):
+            seen = self.cnn(image)
+        return self.fuse(torch.cat([seen.float(), cat, torch.relu(self.goal(goal))], dim=1))
 
     def heard(self, messages: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
         """What the GRU reads from an inbox: messages (K, N, F), lengths (K, N) -> mean of received messages,
@@ -195,7 +199,8 @@ def to_tensors(depth: np.ndarray, rgb: np.ndarray | None, vec: np.ndarray, devic
                ) -> tuple[torch.Tensor, torch.Tensor | None, torch.Tensor]:
     """Numpy blocks (any leading shape, flattened to K) as the tensors `Net.step` takes."""
     k = int(np.prod(depth.shape[:-2]))
-    d = torch.from_numpy(np.ascontiguousarray(depth).reshape(k, *depth.shape[-2:]).astype(np.int32)).to(device)
+    bits = np.ascontiguousarray(depth, dtype=np.uint16).reshape(k, *depth.shape[-2:]).view(np.int16)
+    d = torch.from_numpy(bits).to(device).to(torch.int32) & 0xFFFF  # uint16 sent as its bits, half of int32's
     r = None if rgb is None else torch.from_numpy(np.ascontiguousarray(rgb).reshape(k, *rgb.shape[-3:])).to(device)
     v = torch.from_numpy(np.ascontiguousarray(vec, dtype=np.float32).reshape(k, VEC)).to(device)
     return d, r, v

@@ -38,21 +38,31 @@ class PPOSettings:
         return asdict(self)
 
 
-def sequence_inputs(data: dict[str, np.ndarray], steps: slice, envs: np.ndarray, device: str) -> dict[str, Any]:
-    """Tensors of steps `steps` and sub-environments `envs` of a rollout, flattened to (L, b * N, ...)."""
+def device_rollout(data: dict[str, np.ndarray], device: str) -> dict[str, Any]:
+    """A rollout's arrays as tensors on `device`, each uploaded once (asynchronously from page-locked memory, see
+    `storage.Rollout`; on the CPU they share the arrays' memory). uint16 arrays (depth) travel as their int16
+    bits; `sequence_inputs` restores the values on the device."""
+    import torch
+
+    return {key: torch.from_numpy(a.view(np.int16) if a.dtype == np.uint16 else a).to(device, non_blocking=True)
+            for key, a in data.items()}
+
+
+def sequence_inputs(data: dict[str, Any], steps: slice, envs: Any) -> dict[str, Any]:
+    """Tensors of steps `steps` and sub-environments `envs` (an index tensor) of a rollout on its device
+    (`device_rollout`), flattened to (L, b * N, ...)."""
     import torch
 
     def take(key: str) -> Any:
-        block = data[key][steps][:, envs]
-        return torch.from_numpy(np.ascontiguousarray(block)).to(device)
+        return data[key][steps][:, envs]
 
     depth = take("depth")
     length, b, n = depth.shape[:3]
-    out = {"depth": depth.to(torch.int32).flatten(1, 2), "vec": take("vec").flatten(1, 2),
+    out = {"depth": (depth.to(torch.int32) & 0xFFFF).flatten(1, 2), "vec": take("vec").flatten(1, 2),
            "rgb": take("rgb").flatten(1, 2) if "rgb" in data else None,
            "messages": take("inbox").flatten(1, 2), "lengths": take("inbox_len").flatten(1, 2),
            "first": take("first").flatten(1, 2), "alive": take("alive"),
-           "hidden": torch.from_numpy(data["hidden"][steps.start, envs]).to(device).flatten(0, 1),
+           "hidden": data["hidden"][steps.start, envs].flatten(0, 1),
            "shape": (length, b, n)}
     return out
 
@@ -78,6 +88,8 @@ def ppo_update(net: Any, optimizer: Any, data: dict[str, np.ndarray], advantages
     mean, std = (float(valid.mean()), float(valid.std()) + 1e-8) if valid.size else (0.0, 1.0)
     norm_adv = np.where(alive, (advantages - mean) / std, 0.0).astype(np.float32)
     steps, envs = alive.shape[:2]
+    on_device = device_rollout({**data, "norm_adv": norm_adv, "returns": returns.astype(np.float32, copy=False)},
+                               device)
     chunks = [slice(s, min(s + settings.bptt, steps)) for s in range(0, steps, settings.bptt)]
     groups = max(1, min(settings.minibatches, envs))
     totals: dict[str, float] = {"policy_loss": 0.0, "value_loss": 0.0, "entropy": 0.0, "approx_kl": 0.0,
@@ -86,26 +98,26 @@ def ppo_update(net: Any, optimizer: Any, data: dict[str, np.ndarray], advantages
     for _ in range(settings.epochs):
         order = rng.permutation(envs)
         for part in np.array_split(order, groups):
-            part = np.sort(part)
+            part = torch.from_numpy(np.sort(part)).to(device)
             for chunk in chunks:
-                inputs = sequence_inputs(data, chunk, part, device)
+                inputs = sequence_inputs(on_device, chunk, part)
                 logits, values = evaluate_sequences(net, inputs)
 
-                def tensor(a: np.ndarray, chunk: slice = chunk, part: np.ndarray = part) -> Any:
-                    return torch.from_numpy(np.ascontiguousarray(a[chunk][:, part])).to(device)
+                def tensor(key: str, chunk: slice = chunk, part: Any = part) -> Any:
+                    return on_device[key][chunk][:, part]
 
                 mask = inputs["alive"].float()
                 total = mask.sum().clamp(min=1.0)
                 dist = torch.distributions.Categorical(logits=logits)
-                logp = dist.log_prob(tensor(data["actions"]))
-                ratio = torch.exp(logp - tensor(data["logp"]))
-                adv = tensor(norm_adv)
+                logp = dist.log_prob(tensor("actions"))
+                ratio = torch.exp(logp - tensor("logp"))
+                adv = tensor("norm_adv")
                 surrogate = torch.min(ratio * adv, ratio.clamp(1 - settings.clip, 1 + settings.clip) * adv)
                 policy_loss = -(surrogate * mask).sum() / total
-                value_loss = 0.5 * (((values - tensor(returns)) ** 2) * mask).sum() / total
+                value_loss = 0.5 * (((values - tensor("returns")) ** 2) * mask).sum() / total
                 entropy = (dist.entropy() * mask).sum() / total
                 loss = policy_loss + settings.value_coef * value_loss - settings.entropy_coef * entropy
-                found_loss = found_bce(logits, tensor(data["in_region"]).float(), mask, total)
+                found_loss = found_bce(logits, tensor("in_region").float(), mask, total)
                 if settings.found_aux > 0:
                     loss = loss + settings.found_aux * found_loss
                 optimizer.zero_grad()

@@ -16,6 +16,8 @@ LEARNING_PPO = PPOSettings(lr=7e-4, epochs=2, found_aux=1.0)
 #: Algorithms trained on the team's own reward per agent; the others share the team reward (sum over agents).
 OWN_REWARD = ("multi-ppo",)
 
+PRECISIONS = ("auto", "fp32", "bf16")
+
 
 @dataclass(frozen=True)
 class TrainSettings:
@@ -55,8 +57,13 @@ class TrainSettings:
     #: The EGL device the sampler renders on; None: the CUDA device's index with `device` cuda[:K], else EGL's
     #: default display.
     gpu: int | None = None
+    #: The CNN's arithmetic: `bf16` autocast, `fp32`, or `auto` (bf16 on CUDA, fp32 on the CPU); the GRU, the
+    #: heads and the losses stay float32 (docs/training.md, "On a GPU").
+    precision: str = "auto"
 
     def __post_init__(self) -> None:
+        if self.precision not in PRECISIONS:
+            raise InputError(f"--precision must be one of {', '.join(PRECISIONS)}, got {self.precision!r}")
         if self.algo not in ALGOS:
             raise InputError(f"--algo must be one of {', '.join(ALGOS)}, got {self.algo!r}")
         if self.device not in ("cpu", "cuda") and not self.device.startswith("cuda:"):
@@ -79,6 +86,11 @@ class TrainSettings:
         if self.device.startswith("cuda"):
             return int(self.device.partition(":")[2] or 0)
         return None
+
+    @property
+    def bf16(self) -> bool:
+        """True when the CNN runs under bf16 autocast (`precision`)."""
+        return self.precision == "bf16" or (self.precision == "auto" and self.device.startswith("cuda"))
 
     @property
     def mode(self) -> str:

@@ -58,11 +58,14 @@ class StorageShape:
 
 
 class Rollout:
-    """Numpy arrays of one rollout (`StorageShape.fields`); filled step by step with `put`."""
+    """Numpy arrays of one rollout (`StorageShape.fields`); filled step by step with `put`. With `pinned` (torch
+    on CUDA) the arrays live in page-locked host memory, so the update's one upload per rollout
+    (`ppo.device_rollout`) is a direct, asynchronous copy; a trainer reuses one `Rollout` across updates, since
+    every field is written again each rollout and page-locked memory is slow to allocate."""
 
-    def __init__(self, shape: StorageShape) -> None:
+    def __init__(self, shape: StorageShape, pinned: bool = False) -> None:
         self.shape = shape
-        self.data = {name: np.zeros(s, dtype) for name, (s, dtype) in shape.fields().items()}
+        self.data = {name: _zeros(s, dtype, pinned) for name, (s, dtype) in shape.fields().items()}
 
     def put_observation(self, t: int, arrays: dict[str, np.ndarray], rows: slice = ALL) -> None:
         """Copy the sampler's current observations and masks (`alive`, `first`) of `rows` into step t."""
@@ -85,3 +88,15 @@ class Rollout:
         """Time slices of at most `length` steps covering the rollout (truncated BPTT)."""
         t = self.shape.steps
         return [slice(s, min(s + length, t)) for s in range(0, t, length)]
+
+
+def _zeros(shape: tuple[int, ...], dtype: np.dtype, pinned: bool) -> np.ndarray:
+    """A zeroed array, in page-locked memory with `pinned` (uint16 through its int16 twin: torch's
+    unsigned 16-bit tensors lack most CUDA kernels)."""
+    if not pinned:
+        return np.zeros(shape, dtype)
+    import torch
+
+    twin = np.dtype(np.int16) if dtype == np.uint16 else dtype
+    tensor = torch.zeros(shape, dtype=torch.from_numpy(np.empty(0, twin)).dtype, pin_memory=True)
+    return tensor.numpy().view(dtype)

@@ -92,6 +92,8 @@ class Trainer:
         self.device = settings.device
         torch.manual_seed(settings.seed)
         self.net = Net(model_config(settings)).to(self.device)
+        self.net.bf16 = settings.bf16
+        self._rollout: Rollout | None = None
         self.optimizer = torch.optim.Adam(self.net.parameters(), lr=settings.ppo.lr, eps=1e-5)
         self.update, self.agent_steps, self.episodes, self.wall_before = 0, 0, 0, 0.0
         self.curve: list[dict[str, float]] = []
@@ -221,8 +223,11 @@ class Trainer:
 
         s = self.settings
         b, n = s.num_envs, s.agents
-        rollout = Rollout(StorageShape(s.rollout, b, n, s.image_size, s.use_rgb, s.hidden,
-                                       max(self.net.config.message_floats, 1)))
+        if self._rollout is None:  # every field is written again each rollout: one buffer serves every update
+            self._rollout = Rollout(StorageShape(s.rollout, b, n, s.image_size, s.use_rgb, s.hidden,
+                                                 max(self.net.config.message_floats, 1)),
+                                    pinned=self.device.startswith("cuda"))
+        rollout = self._rollout
         gen = torch.Generator().manual_seed(s.seed * 1_000_003 + self.update)
         draws = torch.rand((s.rollout, b, n), generator=gen, dtype=torch.float64).numpy()
         groups = [slice(rows[0], rows[-1] + 1) for rows in sampler.groups]
