@@ -230,11 +230,11 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
     memory = result["rollout_memory"]
     return [f"{m['cpus']} CPUs; 1-min load {m['load_average_1min_at_start']} at start, "
             f"{m['load_average_1min_at_end']} at end",
-            f"training on {t['device']}, B={t['envs']} in {t['workers']} workers: {t['agent_steps_per_s']} "
-            f"agent-steps/s steady (goal {result['goal']['training_agent_steps_per_s']:.0f}), "
+            f"training on {t.get('device', 'cpu')}, B={t['envs']} in {t['workers']} workers: "
+            f"{t['agent_steps_per_s']} agent-steps/s steady (goal {result['goal']['training_agent_steps_per_s']:.0f}), "
             f"{t['agent_steps_per_s_overall']} overall; split "
-            + ", ".join(f"{k} {v:.0%}" for k, v in t.get("time_split_share_of_loop",
-                                                          t["trainer_wait_share"]).items()),
+            + ", ".join(f"{k} {v:.0%}" for k, v in (t.get("time_split_share_of_loop")
+                                                     or t["trainer_wait_share"]).items()),
             f"batch renderer ({r['renderer']}, {r['views_per_call']} views per call, 64x64): "
             f"{r['depth_frames_per_s']} frames/s depth, {r['rgbd_frames_per_s']} RGB-D",
             f"rollout B=8 N=3 256 steps 64x64 RGB-D: {memory['mib']} MiB ({memory['mib_with_float32_depth']} MiB "

@@ -22,6 +22,18 @@ def test_training_measure_reports_rates_and_time_split(tiny_dataset, tmp_path):
     assert {"render", "physics", "env_other", "policy_forward", "update"} <= set(split)
     assert split["render"] > 0 and split["physics"] > 0 and split["update"] > 0  # the timed calls were the ones used
     assert sum(doc["time_split_share_of_loop"].values()) == pytest.approx(1.0, abs=1e-2)
+    assert set(doc["trainer_wait_share"]) == {"sample", "forward", "update"} and doc["device"] == "cpu"
+    assert sum(doc["trainer_wait_share"].values()) == pytest.approx(1.0, abs=1e-2)
+
+
+def test_the_gpu_shape_of_the_measure_leaves_the_full_split_out(tiny_dataset, tmp_path):
+    from main_bench.benchmarks.training import training
+
+    dataset, cache = tiny_dataset
+    doc = training(2, tmp_path, envs=4, threads=1, episodes=dataset, workers=2, full_split=False,
+                   precision="bf16", split="val", cache_dir=cache)
+    assert doc["workers"] == 2 and doc["envs"] == 4 and doc["cnn_bf16"] is True
+    assert "time_split_share_of_loop" not in doc and doc["agent_steps_per_s"] > 0
 
 
 def test_batch_renderer_measure_reports_frames_per_second():
