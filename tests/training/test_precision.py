@@ -19,10 +19,10 @@ from main_bench.training.storage import Rollout, StorageShape
 T, B, N, S = 16, 4, 2, 32
 
 
-def _rollout(seed: int = 0) -> Rollout:
+def _rollout(seed: int = 0, pinned: bool = False) -> Rollout:
     """A rollout of random observations, actions and outcomes (deterministic for `seed`)."""
     rng = np.random.default_rng(seed)
-    rollout = Rollout(StorageShape(T, B, N, S, False, 32, 1))
+    rollout = Rollout(StorageShape(T, B, N, S, False, 32, 1), pinned=pinned)
     d = rollout.data
     d["depth"][:] = rng.integers(0, 65_536, d["depth"].shape, dtype=np.uint16)
     d["vec"][:] = rng.normal(size=d["vec"].shape).astype(np.float32)
@@ -38,23 +38,34 @@ def _rollout(seed: int = 0) -> Rollout:
     return rollout
 
 
-def _update(bf16: bool) -> dict[str, float]:
+def _update(bf16: bool, device: str = "cpu") -> dict[str, float]:
     torch.manual_seed(0)
-    net = Net(ModelConfig(algo="ippo", agents=N, image_size=S, hidden=32, features=32))
+    net = Net(ModelConfig(algo="ippo", agents=N, image_size=S, hidden=32, features=32)).to(device)
     net.bf16 = bf16
     optimizer = torch.optim.Adam(net.parameters(), lr=7e-4, eps=1e-5)
-    data = _rollout().data
+    data = _rollout(pinned=device.startswith("cuda")).data
     settings = PPOSettings(epochs=2, bptt=8, found_aux=1.0)
     advantages, returns = gae(data["rewards"], data["values"], data["done"], data["alive"], 0.99, 0.95)
-    return ppo_update(net, optimizer, data, advantages, returns, settings, np.random.default_rng(0))
+    return ppo_update(net, optimizer, data, advantages, returns, settings, np.random.default_rng(0), device)
+
+
+def _close(got: dict[str, float], want: dict[str, float]) -> None:
+    assert got.keys() == want.keys()
+    for key in ("policy_loss", "value_loss", "entropy", "found_loss"):
+        assert got[key] == pytest.approx(want[key], rel=1e-3, abs=1e-4), key
 
 
 def test_bf16_autocast_keeps_the_update_losses_within_tolerance():
     full, half = _update(False), _update(True)
-    assert full.keys() == half.keys()
-    for key in ("policy_loss", "value_loss", "entropy", "found_loss"):
-        assert half[key] == pytest.approx(full[key], rel=1e-3, abs=1e-4), key
+    _close(half, full)
     assert full != half  # the flag really changes the arithmetic
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs CUDA: run on a GPU machine (docs/training.md)")
+def test_on_cuda_the_pinned_upload_and_bf16_keep_the_cpu_losses():
+    cpu = _update(False)
+    _close(_update(False, "cuda"), cpu)
+    _close(_update(True, "cuda"), cpu)
 
 
 def test_the_upload_keeps_uint16_depth_exact():
