@@ -203,6 +203,7 @@ def run(quick: bool = False, device: str = "cpu", envs: int = TRAIN_ENVS, worker
     machine's measurement; on a GPU machine `device` cuda, more `envs` and `workers` (the full time split is then
     left out: its in-process sampler would measure one core, not the run; the trainer's wait split stays)."""
     from ..errors import InputError
+    from ..training.settings import TrainSettings
 
     if envs < 2 * max(workers, 1):
         raise InputError(f"--envs {envs}: needs at least 2 sub-environments per worker ({workers} workers)")
@@ -215,9 +216,8 @@ def run(quick: bool = False, device: str = "cpu", envs: int = TRAIN_ENVS, worker
         out["training"] = training(updates, Path(tmp), envs=envs, threads=threads, device=device,
                                    workers=workers, full_split=not gpu, precision=precision)
     out["training_meets_goal"] = out["training"]["agent_steps_per_s"] >= goal
-    render_gpu = int(device.partition(":")[2] or 0) if gpu else None
     out["batch_renderer"] = batch_renderer(teams=max(envs // max(workers, 1), 1), calls=5 if quick else 30,
-                                           gpu=render_gpu)
+                                           gpu=TrainSettings(episodes="", device=device).render_device)
     out["rollout_memory"] = rollout_memory()
     out["machine"] = machine_done(machine)
     return out
