@@ -1,5 +1,5 @@
 """Training speed benchmark: `python tools/bench_training.py [--json] [--quick]` on the 2-core machine; on a GPU
-machine `--device cuda --envs 256 --workers 14` (see main_bench.benchmarks.training)."""
+machine `--device cuda --envs 1024 --workers 15` (see main_bench.benchmarks.training)."""
 
 from __future__ import annotations
 

@@ -216,7 +216,9 @@ def run(quick: bool = False, device: str = "cpu", envs: int = TRAIN_ENVS, worker
         out["training"] = training(updates, Path(tmp), envs=envs, threads=threads, device=device,
                                    workers=workers, full_split=not gpu, precision=precision)
     out["training_meets_goal"] = out["training"]["agent_steps_per_s"] >= goal
-    out["batch_renderer"] = batch_renderer(teams=max(envs // max(workers, 1), 1), calls=5 if quick else 30,
+    # On the CPU one call for all B teams (the in-process sampler's call); on a GPU one worker's share.
+    out["batch_renderer"] = batch_renderer(teams=max(envs // max(workers, 1), 1) if gpu else envs,
+                                           calls=5 if quick else 30,
                                            gpu=TrainSettings(episodes="", device=device).render_device)
     out["rollout_memory"] = rollout_memory()
     out["machine"] = machine_done(machine)

@@ -38,6 +38,11 @@ class PPOSettings:
         return asdict(self)
 
 
+#: The rollout's arrays a PPO update reads (besides the advantages and returns computed from the others).
+UPDATE_KEYS = ("depth", "rgb", "vec", "inbox", "inbox_len", "hidden", "first", "alive", "actions", "logp",
+               "in_region")
+
+
 def device_rollout(data: dict[str, np.ndarray], device: str) -> dict[str, Any]:
     """A rollout's arrays as tensors on `device`, each uploaded once (asynchronously from page-locked memory, see
     `storage.Rollout`; on the CPU they share the arrays' memory). uint16 arrays (depth) travel as their int16
@@ -88,7 +93,8 @@ def ppo_update(net: Any, optimizer: Any, data: dict[str, np.ndarray], advantages
     mean, std = (float(valid.mean()), float(valid.std()) + 1e-8) if valid.size else (0.0, 1.0)
     norm_adv = np.where(alive, (advantages - mean) / std, 0.0).astype(np.float32)
     steps, envs = alive.shape[:2]
-    on_device = device_rollout({**data, "norm_adv": norm_adv, "returns": returns.astype(np.float32, copy=False)},
+    used = {key: data[key] for key in UPDATE_KEYS if key in data}
+    on_device = device_rollout({**used, "norm_adv": norm_adv, "returns": returns.astype(np.float32, copy=False)},
                                device)
     chunks = [slice(s, min(s + settings.bptt, steps)) for s in range(0, steps, settings.bptt)]
     groups = max(1, min(settings.minibatches, envs))
