@@ -195,12 +195,23 @@ class Net(nn.Module):
         return self.critic(inputs.reshape(b * n, -1)).reshape(b, n)
 
 
+def uint16_bits(array: np.ndarray) -> np.ndarray:
+    """A uint16 array (depth in millimetres) as its int16 bits, the form it travels to a device in (half of
+    int32's bytes; torch's unsigned 16-bit tensors lack most CUDA kernels); any other array unchanged."""
+    return array.view(np.int16) if array.dtype == np.uint16 else array
+
+
+def from_uint16_bits(bits: torch.Tensor) -> torch.Tensor:
+    """The int32 values of uint16 data carried as int16 bits (`uint16_bits`)."""
+    return bits.to(torch.int32) & 0xFFFF
+
+
 def to_tensors(depth: np.ndarray, rgb: np.ndarray | None, vec: np.ndarray, device: str = "cpu",
                ) -> tuple[torch.Tensor, torch.Tensor | None, torch.Tensor]:
     """Numpy blocks (any leading shape, flattened to K) as the tensors `Net.step` takes."""
     k = int(np.prod(depth.shape[:-2]))
-    bits = np.ascontiguousarray(depth, dtype=np.uint16).reshape(k, *depth.shape[-2:]).view(np.int16)
-    d = torch.from_numpy(bits).to(device).to(torch.int32) & 0xFFFF  # uint16 sent as its bits, half of int32's
+    bits = uint16_bits(np.ascontiguousarray(depth, dtype=np.uint16).reshape(k, *depth.shape[-2:]))
+    d = from_uint16_bits(torch.from_numpy(bits).to(device))
     r = None if rgb is None else torch.from_numpy(np.ascontiguousarray(rgb).reshape(k, *rgb.shape[-3:])).to(device)
     v = torch.from_numpy(np.ascontiguousarray(vec, dtype=np.float32).reshape(k, VEC)).to(device)
     return d, r, v

@@ -49,21 +49,22 @@ def device_rollout(data: dict[str, np.ndarray], device: str) -> dict[str, Any]:
     bits; `sequence_inputs` restores the values on the device."""
     import torch
 
-    return {key: torch.from_numpy(a.view(np.int16) if a.dtype == np.uint16 else a).to(device, non_blocking=True)
-            for key, a in data.items()}
+    from .model import uint16_bits
+
+    return {key: torch.from_numpy(uint16_bits(a)).to(device, non_blocking=True) for key, a in data.items()}
 
 
 def sequence_inputs(data: dict[str, Any], steps: slice, envs: Any) -> dict[str, Any]:
     """Tensors of steps `steps` and sub-environments `envs` (an index tensor) of a rollout on its device
     (`device_rollout`), flattened to (L, b * N, ...)."""
-    import torch
+    from .model import from_uint16_bits
 
     def take(key: str) -> Any:
         return data[key][steps][:, envs]
 
     depth = take("depth")
     length, b, n = depth.shape[:3]
-    out = {"depth": (depth.to(torch.int32) & 0xFFFF).flatten(1, 2), "vec": take("vec").flatten(1, 2),
+    out = {"depth": from_uint16_bits(depth).flatten(1, 2), "vec": take("vec").flatten(1, 2),
            "rgb": take("rgb").flatten(1, 2) if "rgb" in data else None,
            "messages": take("inbox").flatten(1, 2), "lengths": take("inbox_len").flatten(1, 2),
            "first": take("first").flatten(1, 2), "alive": take("alive"),
