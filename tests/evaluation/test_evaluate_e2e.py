@@ -229,6 +229,37 @@ def test_out_that_is_a_file_or_foreign_run_file_is_refused(cli, tiny_dataset, tm
     assert res.code == 2 and "not a main-bench run file" in res.err
 
 
+def test_a_foreign_folder_is_refused_before_workers_write_policy_logs_into_it(cli, tiny_dataset, tmp_path):
+    """Worker processes start their policy processes, whose logs go into the results folder, while the command
+    plans: a folder of someone else's is refused before any worker starts, so nothing is written into it."""
+    dataset, cache = tiny_dataset
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    res = cli("evaluate", "--episodes", dataset, "--split", "val", "--agent", WALKER, "--out", mine,
+              "--cache-dir", cache, "--workers", "2", "--limit", "2", "--no-sandbox")
+    assert res.code == 2 and "is not empty and is not a main-bench results directory" in res.err, res.err
+    assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]
+
+
+def test_a_fresh_folder_that_a_worker_log_reaches_first_is_claimed(monkeypatch, tiny_dataset, tmp_path):
+    """A worker's policy log may reach a fresh results folder before the command claims it (the command plans
+    while its workers start): the folder is still this run's."""
+    from main_bench.evaluation.run import runner
+
+    out = tmp_path / "out"
+    real_plan = runner.plan
+
+    def plan_after_a_worker_log(settings):
+        (out / "logs").mkdir(parents=True)
+        (out / "logs" / "team-1.log").write_text("")
+        return real_plan(settings)
+
+    monkeypatch.setattr(runner, "plan", plan_after_a_worker_log)
+    evaluate(_settings(tiny_dataset, out, agent="baseline:random", limit=1))
+    assert (out / "summary.json").is_file() and (out / "logs" / "team-1.log").is_file()
+
+
 def test_resume_refuses_a_data_set_regenerated_at_the_same_path(cli, tiny_dataset, tmp_path):
     dataset, cache = tiny_dataset
     copy = tmp_path / "data"

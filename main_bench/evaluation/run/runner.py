@@ -140,7 +140,21 @@ def submission_meta(settings: EvalSettings) -> SubmissionMeta:
                           links=meta.links or doc.links, date=meta.date or doc.date, baseline=is_baseline)
 
 
-def _check_run_file(out: Path, identity: dict[str, Any]) -> None:
+def _check_out(out: Path) -> bool:
+    """Refuse an `--out` that is a file, or a folder that holds something other than main-bench results; True
+    when it is absent or empty (a fresh results folder). Checked before worker processes start, since their
+    policy processes write their logs into it (`worker.policy_log_path`)."""
+    if out.exists() and not out.is_dir():
+        raise ResultsError("--out exists and is not a folder; give a folder for the results", path=out)
+    fresh = not out.is_dir() or not any(out.iterdir())
+    if not fresh and not (out / RUN_FILE).is_file():
+        raise ResultsError("is not empty and is not a main-bench results directory; give a new --out", path=out)
+    return fresh
+
+
+def _check_run_file(out: Path, identity: dict[str, Any], fresh: bool) -> None:
+    """Claim `out` for this run (`fresh`: `_check_out` found it absent or empty, so what it holds now came from
+    this run's workers), or check that the run it holds is this one, or one that never finished a chunk."""
     path = out / RUN_FILE
     if path.is_file():
         old = read_json(path, what="results run file")
@@ -155,7 +169,7 @@ def _check_run_file(out: Path, identity: dict[str, Any]) -> None:
                 if (out / kind).is_dir():
                     shutil.rmtree(out / kind)
             _write_run_file(path, identity)
-    elif out.is_dir() and any(out.iterdir()):
+    elif not fresh and any(out.iterdir()):
         raise ResultsError("is not empty and is not a main-bench results directory; give a new --out", path=out)
     else:
         _write_run_file(path, identity)
@@ -184,6 +198,7 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
         parse_spec(settings.agent)  # a malformed spec fails now, before any file is written
         if settings.sandbox:
             require_sandbox()
+    fresh = _check_out(Path(settings.out))
     pool = None
     if settings.executor == "local" and settings.workers > 1:
         from .executors import LocalWorkers
@@ -191,7 +206,7 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
         # they start up while this process plans; it works too
         pool = LocalWorkers(settings, settings.workers - 1, _progress_every(progress))
     try:
-        outcome = _evaluate(settings, progress, pool, t0)
+        outcome = _evaluate(settings, progress, pool, t0, fresh)
     finally:
         if pool is not None:
             pool.close()
@@ -205,13 +220,12 @@ def _progress_every(progress: ProgressSink | None) -> float | None:
     return None if progress is None else PROGRESS_INTERVAL_S
 
 
-def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float) -> EvaluationOutcome:
+def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float,
+              fresh: bool) -> EvaluationOutcome:
     manifest, chunks = plan(settings)
     meta = submission_meta(settings)
     settings = replace(settings, submission=meta)
     out = Path(settings.out)
-    if out.exists() and not out.is_dir():
-        raise ResultsError("--out exists and is not a folder; give a folder for the results", path=out)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -222,7 +236,7 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
                             path=out)
 
     with folder_lock(out, busy):  # two runs in one folder would take each other's files for leftovers
-        _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
+        _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash}, fresh)
         return _run(settings, manifest, chunks, out, progress, pool, t0)
 
 
