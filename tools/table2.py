@@ -7,7 +7,9 @@
 
 `train` runs one `main-bench train run` at a time (each resumes from its checkpoint, so stopping loses at most
 the updates since it); with `--max-minutes` it stops starting runs after M minutes and gives the running one the
-time left. Bad input: one line on stderr, exit 2.
+time left. Every command takes `--comm` (default comm-rm): the communicating variant that gets seeds and teams
+of 3 beside IPPO; give the best of the four once they are scored, to every command alike. Bad input: one line on
+stderr, exit 2.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from pathlib import Path
 
 from main_bench.errors import InputError, MainBenchError
 from main_bench.training.campaign import ENVS, ROLLOUT, Campaign, Cell, plot_fig5
+from main_bench.training.model import COMM_ALGOS
 
 #: What `publish` copies of a run: the submission (a few MB) and its curves, never checkpoints or rollouts.
 SUBMISSION_FILES = ("policy.py", "model.py", "obs.py", "weights.pt", "metadata.json")
@@ -144,9 +147,11 @@ def main() -> None:
     parser.add_argument("--root", default=Campaign().root, help="the folder of the runs and their results")
     parser.add_argument("--train-split", default="train", help="the split every run trains on")
     parser.add_argument("--eval-split", default="val", help="the split every run is scored on")
+    parser.add_argument("--comm", choices=COMM_ALGOS, default=Campaign().comm,
+                        help="the communicating variant that gets seeds and teams of 3 beside IPPO")
     args = parser.parse_args()
     campaign = Campaign(episodes=args.episodes, root=args.root, agent_steps=args.budget,
-                        train_split=args.train_split, eval_split=args.eval_split)
+                        train_split=args.train_split, eval_split=args.eval_split, comm=args.comm)
     try:
         if args.command == "status":
             status(campaign)

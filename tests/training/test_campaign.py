@@ -35,6 +35,22 @@ def test_cells_budgets_and_commands():
     assert args[args.index("--updates") + 1] == str(c.updates(Cell("mappo", 2, 0)))
 
 
+def test_table2_tool_takes_the_communicating_variant_to_seed(tmp_path):
+    """`--comm` names the variant that gets seeds and teams of 3 (the best one once all four are scored);
+    anything but a communicating algorithm is refused with exit 2."""
+    def status(*extra: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, str(TOOL), "status", "--root", str(tmp_path / "runs"), *extra],
+                              capture_output=True, text=True, timeout=120, cwd=tmp_path)
+
+    shown = status("--comm", "comm-v")
+    assert shown.returncode == 0, shown.stderr
+    names = [line.split()[0] for line in shown.stdout.splitlines()]
+    assert "comm-v-n3-s0" in names and "comm-v-n2-s2" in names and "comm-rm-n3-s0" not in names
+    assert "comm-rm-n3-s0" in [line.split()[0] for line in status().stdout.splitlines()]
+    refused = status("--comm", "ippo")
+    assert refused.returncode == 2 and "--comm" in refused.stderr
+
+
 @pytest.mark.slow
 def test_table2_tool_trains_scores_and_publishes(tiny_dataset, tmp_path):
     dataset, cache = tiny_dataset
