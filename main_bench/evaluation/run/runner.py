@@ -140,21 +140,23 @@ def submission_meta(settings: EvalSettings) -> SubmissionMeta:
                           links=meta.links or doc.links, date=meta.date or doc.date, baseline=is_baseline)
 
 
-def _check_out(out: Path) -> bool:
-    """Refuse an `--out` that is a file, or a folder that holds something other than main-bench results; True
-    when it is absent or empty (a fresh results folder). Checked before worker processes start, since their
-    policy processes write their logs into it (`worker.policy_log_path`)."""
-    if out.exists() and not out.is_dir():
-        raise ResultsError("--out exists and is not a folder; give a folder for the results", path=out)
-    fresh = not out.is_dir() or not any(out.iterdir())
-    if not fresh and not (out / RUN_FILE).is_file():
-        raise ResultsError("is not empty and is not a main-bench results directory; give a new --out", path=out)
-    return fresh
+def _fresh_out(out: Path) -> bool | None:
+    """True when `--out` is absent or an empty folder, False when it holds a results folder's run file, None for
+    anything else (a file, someone else's folder: refused once the run is planned, `_evaluate`). Looked at before
+    worker processes start, since their policy processes write their logs into it (`worker.policy_log_path`)."""
+    if not out.exists():
+        return True
+    if not out.is_dir():
+        return None
+    if not any(out.iterdir()):
+        return True
+    return False if (out / RUN_FILE).is_file() else None
 
 
 def _check_run_file(out: Path, identity: dict[str, Any], fresh: bool) -> None:
-    """Claim `out` for this run (`fresh`: `_check_out` found it absent or empty, so what it holds now came from
-    this run's workers), or check that the run it holds is this one, or one that never finished a chunk."""
+    """Claim `out` for this run (`fresh`: `_fresh_out` found it absent or empty before the workers started, so
+    what it holds now is their logs), or check that the run it holds is this one, or one that never finished a
+    chunk."""
     path = out / RUN_FILE
     if path.is_file():
         old = read_json(path, what="results run file")
@@ -198,15 +200,16 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
         parse_spec(settings.agent)  # a malformed spec fails now, before any file is written
         if settings.sandbox:
             require_sandbox()
-    fresh = _check_out(Path(settings.out))
+    fresh = _fresh_out(Path(settings.out))
     pool = None
-    if settings.executor == "local" and settings.workers > 1:
+    # not into a folder that is about to be refused: its workers start after the checks (`executors.run_local`)
+    if settings.executor == "local" and settings.workers > 1 and fresh is not None:
         from .executors import LocalWorkers
 
         # they start up while this process plans; it works too
         pool = LocalWorkers(settings, settings.workers - 1, _progress_every(progress))
     try:
-        outcome = _evaluate(settings, progress, pool, t0, fresh)
+        outcome = _evaluate(settings, progress, pool, t0, bool(fresh))
     finally:
         if pool is not None:
             pool.close()
@@ -226,6 +229,8 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
     meta = submission_meta(settings)
     settings = replace(settings, submission=meta)
     out = Path(settings.out)
+    if out.exists() and not out.is_dir():
+        raise ResultsError("--out exists and is not a folder; give a folder for the results", path=out)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
