@@ -231,15 +231,22 @@ def test_out_that_is_a_file_or_foreign_run_file_is_refused(cli, tiny_dataset, tm
 
 def test_a_foreign_folder_is_refused_before_workers_write_policy_logs_into_it(cli, tiny_dataset, tmp_path):
     """Worker processes start their policy processes, whose logs go into the results folder, while the command
-    plans: a folder of someone else's is refused before any worker starts, so nothing is written into it."""
+    plans: they start only in a free folder, so a folder of someone else's, or another evaluation's results, is
+    refused with nothing written into it."""
     dataset, cache = tiny_dataset
+    base = ("evaluate", "--episodes", dataset, "--split", "val", "--cache-dir", cache, "--limit", "2", "--no-sandbox")
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "notes.txt").write_text("mine")
-    res = cli("evaluate", "--episodes", dataset, "--split", "val", "--agent", WALKER, "--out", mine,
-              "--cache-dir", cache, "--workers", "2", "--limit", "2", "--no-sandbox")
+    res = cli(*base, "--agent", WALKER, "--out", mine, "--workers", "2")
     assert res.code == 2 and "is not empty and is not a main-bench results directory" in res.err, res.err
     assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]
+    other = tmp_path / "other"
+    assert cli(*base, "--agent", WALKER, "--out", other).code == 0
+    before = sorted(str(p.relative_to(other)) for p in other.rglob("*"))
+    res = cli(*base, "--agent", WALKER, "--out", other, "--workers", "2", "--seed", "1")
+    assert res.code == 2 and "holds a different evaluation (differs in seed)" in res.err, res.err
+    assert sorted(str(p.relative_to(other)) for p in other.rglob("*")) == before
 
 
 def test_a_fresh_folder_that_a_worker_log_reaches_first_is_claimed(monkeypatch, tiny_dataset, tmp_path):
@@ -256,8 +263,22 @@ def test_a_fresh_folder_that_a_worker_log_reaches_first_is_claimed(monkeypatch, 
         return real_plan(settings)
 
     monkeypatch.setattr(runner, "plan", plan_after_a_worker_log)
-    evaluate(_settings(tiny_dataset, out, agent="baseline:random", limit=1))
+    outcome = evaluate(_settings(tiny_dataset, out, workers=2, sandbox=False))
+    assert outcome.worker_cpu_seconds > 0  # a worker process played
     assert (out / "summary.json").is_file() and (out / "logs" / "team-1.log").is_file()
+
+
+def test_a_folder_left_with_only_policy_logs_does_not_block_the_rerun(cli, tiny_dataset, tmp_path):
+    """A run stopped before it claimed its folder (bad input found while its workers started) leaves their
+    policy logs only; the corrected command takes the folder."""
+    dataset, cache = tiny_dataset
+    out = tmp_path / "out"
+    (out / "logs").mkdir(parents=True)
+    (out / "logs" / "agent_0-123.log").write_text("started\n")
+    res = cli("evaluate", "--episodes", dataset, "--split", "val", "--agent", "baseline:random", "--out", out,
+              "--cache-dir", cache, "--limit", "1", "--no-progress")
+    assert res.code == 0, res.err
+    assert (out / "summary.json").is_file() and (out / "logs" / "agent_0-123.log").read_text() == "started\n"
 
 
 def test_resume_refuses_a_data_set_regenerated_at_the_same_path(cli, tiny_dataset, tmp_path):

@@ -31,7 +31,7 @@ from ..output.ledger import (
     write_seal,
 )
 from .chunks import Chunk, make_chunks
-from .settings import EvalSettings, SubmissionMeta
+from .settings import LOGS_FOLDER, EvalSettings, SubmissionMeta
 
 RUN_FILE = "run.json"
 LEDGER_DIR = "ledger"  # where `ledger.write_entry` records finished chunks
@@ -140,23 +140,18 @@ def submission_meta(settings: EvalSettings) -> SubmissionMeta:
                           links=meta.links or doc.links, date=meta.date or doc.date, baseline=is_baseline)
 
 
-def _fresh_out(out: Path) -> bool | None:
-    """True when `--out` is absent or an empty folder, False when it holds a results folder's run file, None for
-    anything else (a file, someone else's folder: refused once the run is planned, `_evaluate`). Looked at before
-    worker processes start, since their policy processes write their logs into it (`worker.policy_log_path`)."""
+def _fresh_out(out: Path) -> bool:
+    """Whether `--out` is free for a new run: absent, or a folder that holds nothing or only `logs/`, the
+    policy logs that worker processes write while the command plans (`worker.policy_log_path`), and that a run
+    stopped before it claimed the folder leaves behind."""
     if not out.exists():
         return True
-    if not out.is_dir():
-        return None
-    if not any(out.iterdir()):
-        return True
-    return False if (out / RUN_FILE).is_file() else None
+    return out.is_dir() and all(entry.name == LOGS_FOLDER and entry.is_dir() for entry in out.iterdir())
 
 
-def _check_run_file(out: Path, identity: dict[str, Any], fresh: bool) -> None:
-    """Claim `out` for this run (`fresh`: `_fresh_out` found it absent or empty before the workers started, so
-    what it holds now is their logs), or check that the run it holds is this one, or one that never finished a
-    chunk."""
+def _check_run_file(out: Path, identity: dict[str, Any]) -> None:
+    """Claim `out` for this run when it is free (`_fresh_out`), or check that the run it holds is this one, or one
+    that never finished a chunk."""
     path = out / RUN_FILE
     if path.is_file():
         old = read_json(path, what="results run file")
@@ -171,7 +166,7 @@ def _check_run_file(out: Path, identity: dict[str, Any], fresh: bool) -> None:
                 if (out / kind).is_dir():
                     shutil.rmtree(out / kind)
             _write_run_file(path, identity)
-    elif not fresh and any(out.iterdir()):
+    elif not _fresh_out(out):
         raise ResultsError("is not empty and is not a main-bench results directory; give a new --out", path=out)
     else:
         _write_run_file(path, identity)
@@ -200,16 +195,16 @@ def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> Ev
         parse_spec(settings.agent)  # a malformed spec fails now, before any file is written
         if settings.sandbox:
             require_sandbox()
-    fresh = _fresh_out(Path(settings.out))
     pool = None
-    # not into a folder that is about to be refused: its workers start after the checks (`executors.run_local`)
-    if settings.executor == "local" and settings.workers > 1 and fresh is not None:
+    # only into a free folder: a folder to be refused, or another run's, gets no policy logs; a resumed run's
+    # workers start once it is checked (`executors.run_local`)
+    if settings.executor == "local" and settings.workers > 1 and _fresh_out(Path(settings.out)):
         from .executors import LocalWorkers
 
         # they start up while this process plans; it works too
         pool = LocalWorkers(settings, settings.workers - 1, _progress_every(progress))
     try:
-        outcome = _evaluate(settings, progress, pool, t0, bool(fresh))
+        outcome = _evaluate(settings, progress, pool, t0)
     finally:
         if pool is not None:
             pool.close()
@@ -223,8 +218,7 @@ def _progress_every(progress: ProgressSink | None) -> float | None:
     return None if progress is None else PROGRESS_INTERVAL_S
 
 
-def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float,
-              fresh: bool) -> EvaluationOutcome:
+def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, t0: float) -> EvaluationOutcome:
     manifest, chunks = plan(settings)
     meta = submission_meta(settings)
     settings = replace(settings, submission=meta)
@@ -241,7 +235,7 @@ def _evaluate(settings: EvalSettings, progress: ProgressSink | None, pool: Any, 
                             path=out)
 
     with folder_lock(out, busy):  # two runs in one folder would take each other's files for leftovers
-        _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash}, fresh)
+        _check_run_file(out, {**settings.identity(), "manifest_hash": manifest.manifest_hash})
         return _run(settings, manifest, chunks, out, progress, pool, t0)
 
 

@@ -23,6 +23,8 @@ EXECUTORS = ("local", "ray")
 #: The largest `message_floats` a data set or track may set (the longest message a policy process describes).
 MAX_MESSAGE_FLOATS = 4096
 RENDERERS = ("auto", "gl", "tiny")
+#: Folder of the results folder holding the policy processes' output (`worker.policy_log_path`).
+LOGS_FOLDER = "logs"
 
 
 @dataclass(frozen=True)

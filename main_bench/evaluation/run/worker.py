@@ -29,7 +29,7 @@ from ..play.episode_loop import EpisodeFailure, LoopSettings, run_episode
 from ..scoring.metrics import EpisodeTrace, episode_metrics
 from .chunks import Chunk
 from .resources import EpisodeResources
-from .settings import EvalSettings
+from .settings import LOGS_FOLDER, EvalSettings
 
 
 @dataclass(frozen=True)
@@ -214,10 +214,6 @@ def agent_endpoints(settings: EvalSettings, manifest: Any) -> tuple[Callable[[in
     limits, spec, sandbox = process_limits(settings), parse_spec(settings.agent), evaluation_sandbox(settings, manifest)
     return (lambda i: ProcessEndpoint(spec, limits, settings.seed, sandbox,
                                       policy_log_path(settings, f"agent_{i}"))), False
-
-
-#: Folder of the results folder holding the policy processes' output (`policy_log`).
-LOGS_FOLDER = "logs"
 
 
 def policy_log_path(settings: EvalSettings, label: str) -> Path:
