@@ -184,7 +184,8 @@ def _finished_work(out: Path) -> bool:
 def evaluate(settings: EvalSettings, progress: ProgressSink | None = None) -> EvaluationOutcome:
     """Run (or resume) an evaluation and write its results directory; returns what was done and the summary.
 
-    Raises `DatasetError`/`SubmissionError`/`ResultsError` for bad input before anything is written, and
+    Raises `DatasetError`/`SubmissionError`/`ResultsError` for bad input before any result is written (into a
+    free `--out`, worker processes may have left their policy logs, which do not block the next run), and
     `PolicyFailure` when the policy fails too many episodes in a row (finished chunks are kept).
     """
     t0 = time.perf_counter()
