@@ -6,7 +6,7 @@ import json
 import shlex
 from pathlib import Path
 
-from main_bench.episodes.validate import validate_dataset
+from main_bench.episodes.validation.validate import validate_dataset
 
 
 def test_demo_runs_every_stage_and_reports_its_outputs(cli, tmp_path):

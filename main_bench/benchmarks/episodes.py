@@ -57,8 +57,8 @@ def _settings(per_scene: int):
 
 
 def _core(scene, navmesh, count: int, repeats: int) -> dict:
-    from ..episodes.sampler import sample_episodes
-    from ..episodes.shards import batch_table
+    from ..episodes.generation.sampler import sample_episodes
+    from ..episodes.generation.shards import batch_table
     from ..episodes.targets import TargetBank
 
     settings = _settings(count)
@@ -147,9 +147,9 @@ def _peak_mib() -> dict:
 
 
 def _scale(ids: list[str], cache: Path, per_scene: int, workers: int, sample: int, workdir: Path) -> dict:
-    from ..episodes.generate import generate_dataset
-    from ..episodes.sources import SceneSource
-    from ..episodes.validate import validate_dataset
+    from ..episodes.generation.generate import generate_dataset
+    from ..episodes.generation.sources import SceneSource
+    from ..episodes.validation.validate import validate_dataset
     from ..navmesh import NavMeshSettings
     from ..scenes import builtin
     from ..scenes.loader import scene_content_hash

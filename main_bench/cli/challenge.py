@@ -89,7 +89,7 @@ def init(
     )
     from ..challenge.store import Store
     from ..challenge.tokens import new_token
-    from ..episodes.secret_seed import make_secret_seed
+    from ..episodes.generation.secret_seed import make_secret_seed
 
     if (folder / CONFIG_FILE).exists():
         raise ChallengeError("is a challenge folder already; choose a new folder", path=folder)

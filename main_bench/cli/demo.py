@@ -108,10 +108,10 @@ def _generate(settings: DemoSettings, cache: Path, log: Callable[[str], None],
               lap: Callable[[str], None]) -> tuple[Path, Any, bool]:
     """Stages 1 to 3: built-in houses and navmeshes, episodes on them, validation with distances recomputed.
     Returns (data set, generation report, validated)."""
-    from ..episodes.generate import generate_dataset
+    from ..episodes.generation.generate import generate_dataset
+    from ..episodes.generation.sources import resolve_sources
     from ..episodes.settings import GenerationSettings
-    from ..episodes.sources import resolve_sources
-    from ..episodes.validate import validate_dataset
+    from ..episodes.validation.validate import validate_dataset
     from ..navmesh import NavMeshSettings
 
     log(f"[1/6] built-in houses and their navmeshes -> {cache}")

@@ -93,9 +93,9 @@ def generate(
     as_json: bool = JsonOption,
 ) -> None:
     """Sample shared/individual-target multi-agent episodes into a Parquet data set (resumable)."""
-    from ..episodes.generate import generate_dataset
+    from ..episodes.generation.generate import generate_dataset
+    from ..episodes.generation.sources import resolve_sources
     from ..episodes.settings import GenerationSettings
-    from ..episodes.sources import resolve_sources
     from ..navmesh import NavMeshSettings
 
     check_up(up)
@@ -103,7 +103,7 @@ def generate(
     width, height = _camera_size(camera)
     secret = None
     if secret_seed_file is not None:
-        from ..episodes.secret_seed import read_secret_seed
+        from ..episodes.generation.secret_seed import read_secret_seed
 
         if seed != 0:
             raise InputError(f"give --seed or --secret-seed-file, not both (got --seed {seed})")
@@ -161,7 +161,7 @@ def validate(
     as_json: bool = JsonOption,
 ) -> None:
     """Check a data set (schema, checksums, ids, value ranges; --recheck distances). Exit 0 only if all hold."""
-    from ..episodes.validate import validate_dataset
+    from ..episodes.validation.validate import validate_dataset
 
     report = validate_dataset(dataset, recheck=recheck, sample=sample, cache_dir=cache_dir)
     emit("episodes validate", report.to_json(), as_json, lambda d: report.render())

@@ -30,7 +30,7 @@ def visualize(
 ) -> None:
     """Top-down picture of one evaluated episode: starts, targets, shortest and walked paths, failures."""
     from ..io import atomic_write_bytes
-    from ..leaderboard.episode_view import load_episode_view
+    from ..leaderboard.episode.view import load_episode_view
 
     refuse_output_over_inputs(out, {"RESULTS": results})
     if fmt is None:
@@ -39,12 +39,12 @@ def visualize(
         raise InputError(f"--format must be png or gif, got {fmt!r}")
     view = load_episode_view(results, episode, cache_dir=cache_dir)
     if fmt == "png":
-        from ..leaderboard.visualize import episode_png
+        from ..leaderboard.episode.visualize import episode_png
 
         data = episode_png(view)
         frames = 1
     else:
-        from ..leaderboard.video import episode_gif
+        from ..leaderboard.episode.video import episode_gif
 
         data, frames = episode_gif(view, renderer=renderer, max_frames=max_frames)
     atomic_write_bytes(out, data)

@@ -23,9 +23,9 @@ import numpy as np
 
 from ..errors import DatasetError, InputError
 from ..io import atomic_write_bytes, atomic_write_json, folder_lock, read_json, sha256_file
+from .generation.sampler import EpisodeBatch
 from .goals import decode_cells
 from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, folder_in_use, identity, read_manifest
-from .sampler import EpisodeBatch
 from .settings import GenerationSettings
 from .targets import Target
 
@@ -110,7 +110,7 @@ def export_habitat(dataset: str | Path, out: str | Path) -> list[Path]:
         stale.unlink()
     for entry in (manifest.navmeshes or {}).values():  # the navmeshes go with the episodes, as Habitat's do
         atomic_write_bytes(out / entry["path"], (manifest.root / entry["path"]).read_bytes())
-    from .shards import shard_report
+    from .generation.shards import shard_report
 
     side = read_json(Path(dataset) / MANIFEST_NAME, what="episode data set manifest")
     side["shard_reports"] = {s.path: shard_report(Path(dataset) / s.path)[1] for s in manifest.shards}
@@ -124,7 +124,7 @@ def _floats(v: np.ndarray) -> list[float]:
 
 def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False) -> Path:
     """Read a main-bench Habitat export back into a data set at `out` (shards and manifest); returns `out`."""
-    from .shards import write_shard
+    from .generation.shards import write_shard
 
     src, out = Path(src), Path(out)
     side = src / SIDECAR
@@ -202,7 +202,7 @@ def import_habitat(src: str | Path, out: str | Path, *, overwrite: bool = False)
 
 
 def _shard_table(eps: dict[str, list[dict]], shard: dict, settings: GenerationSettings):
-    from .shards import batch_table
+    from .generation.shards import batch_table
 
     n = int(shard["agents"])
     ids = sorted(eps)

@@ -84,8 +84,8 @@ def picture_ids(rows: list[EpisodeRow], per_track: int) -> list[str]:
 def build_run_page(sub: LoadedSubmission, slug: str, per_track: int) -> RunPage:
     """Rows and pictures of one run (pictures of episodes whose data set or scene is gone are left out, with
     the reason in the row's note)."""
-    from .episode_view import load_episode_view
-    from .visualize import episode_png
+    from .episode.view import load_episode_view
+    from .episode.visualize import episode_png
 
     rows = episode_rows(sub)
     wanted = set(picture_ids(rows, per_track))

@@ -18,10 +18,10 @@ import trimesh
 from mb_testing import seal_results
 
 from main_bench.cli.app import main
+from main_bench.episodes.generation.shards import write_shard
 from main_bench.episodes.manifest import build_manifest, identity
 from main_bench.episodes.schema import ROW_SCHEMA
 from main_bench.episodes.settings import GenerationSettings
-from main_bench.episodes.shards import write_shard
 from main_bench.evaluation.output.records import (
     RECORD_SCHEMA,
     RESULTS_SCHEMA_VERSION,

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from main_bench.episodes.executors import run_units, start_order
-from main_bench.episodes.generate import unit_weight
-from main_bench.episodes.plan import Shard
+from main_bench.episodes.generation.executors import run_units, start_order
+from main_bench.episodes.generation.generate import unit_weight
+from main_bench.episodes.generation.plan import Shard
 
 UNIT = itemgetter("items")  # picklable: a spawned or forked pool process can run it
 STARTED: list[int] = []

@@ -230,7 +230,7 @@ def test_a_second_run_into_a_folder_in_use_is_refused_and_touches_nothing(gen, t
 
 
 def test_a_node_without_the_built_in_house_generates_it(tmp_path, monkeypatch):
-    from main_bench.episodes.generate import _scene_path
+    from main_bench.episodes.generation.generate import _scene_path
     from main_bench.scenes import builtin
     from main_bench.scenes.loader import scene_content_hash
 

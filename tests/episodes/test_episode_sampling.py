@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from ep_scenes import box_room, furnished_room, l_corridor, room_meshes, staircase, unfolded_x, write_scene
 
+from main_bench.episodes.generation.sampler import sample_episodes
 from main_bench.episodes.goals import footprint_distance, object_region, scene_triangles, target_field
-from main_bench.episodes.sampler import sample_episodes
 from main_bench.episodes.settings import GenerationSettings
 from main_bench.episodes.targets import TargetBank
 from main_bench.errors import DatasetError, InputError

@@ -8,7 +8,7 @@ import json
 import pytest
 
 from main_bench.episodes.dataset import read_manifest
-from main_bench.episodes.secret_seed import make_secret_seed, read_secret_seed
+from main_bench.episodes.generation.secret_seed import make_secret_seed, read_secret_seed
 from main_bench.errors import InputError
 
 SMALL = ("--only-splits", "val", "--agents", "2", "--task", "shared")

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import trimesh
 
-from main_bench.episodes.generate import generate_dataset
+from main_bench.episodes.generation.generate import generate_dataset
+from main_bench.episodes.generation.sources import resolve_sources
 from main_bench.episodes.settings import GenerationSettings
-from main_bench.episodes.sources import resolve_sources
 from main_bench.navmesh import NavMeshSettings
 from main_bench.sim import synthetic
 

@@ -188,9 +188,9 @@ def two_scene_dataset(tmp_path_factory):
     """A val split of two synthetic box houses, 16 shared-target episodes of 2 agents each."""
     import trimesh
 
-    from main_bench.episodes.generate import generate_dataset
+    from main_bench.episodes.generation.generate import generate_dataset
+    from main_bench.episodes.generation.sources import resolve_sources
     from main_bench.episodes.settings import GenerationSettings
-    from main_bench.episodes.sources import resolve_sources
     from main_bench.navmesh import NavMeshSettings
     from main_bench.sim import synthetic
 

@@ -9,9 +9,9 @@ import pyarrow.parquet as pq
 from lb_fixtures import make_results
 from mb_testing import rehash_part
 
-from main_bench.leaderboard.episode_view import load_episode_view
-from main_bench.leaderboard.talk import has_messages
-from main_bench.leaderboard.visualize import episode_figure, episode_png
+from main_bench.leaderboard.episode.talk import has_messages
+from main_bench.leaderboard.episode.view import load_episode_view
+from main_bench.leaderboard.episode.visualize import episode_figure, episode_png
 
 episodes_dir = lb_fixtures.episodes_dir
 

@@ -17,9 +17,9 @@ from PIL import Image
 
 from main_bench.cli.app import main
 from main_bench.errors import InputError
-from main_bench.leaderboard.episode_view import load_episode_view
-from main_bench.leaderboard.video import episode_gif, frame_steps, poses_at
-from main_bench.leaderboard.visualize import (
+from main_bench.leaderboard.episode.video import episode_gif, frame_steps, poses_at
+from main_bench.leaderboard.episode.view import load_episode_view
+from main_bench.leaderboard.episode.visualize import (
     FAILED_RED,
     START_YELLOW,
     TARGET_RED,
@@ -63,7 +63,7 @@ def _near(img: np.ndarray, px: tuple[float, float], color: str, radius: int = 3,
 
 def tint(color: str) -> str:
     """`color` at the success region's opacity over the grey of a navigable cell."""
-    from main_bench.leaderboard.visualize import REGION_ALPHA
+    from main_bench.leaderboard.episode.visualize import REGION_ALPHA
 
     grey = np.array(mcolors.to_rgb(plt_grey()))
     return mcolors.to_hex(REGION_ALPHA * np.array(mcolors.to_rgb(color)) + (1 - REGION_ALPHA) * grey)

@@ -18,7 +18,7 @@ from dataset_files import (
     write_replicacad,
 )
 
-from main_bench.episodes.sources import resolve_sources
+from main_bench.episodes.generation.sources import resolve_sources
 from main_bench.errors import InputError
 from main_bench.scenes import load_scene
 from main_bench.scenes.importers import import_scenes

@@ -9,8 +9,8 @@ import pytest
 from mb_testing import REPO
 
 from main_bench.episodes.dataset import load_episodes
-from main_bench.leaderboard.episode_view import load_episode_view
-from main_bench.leaderboard.visualize import episode_figure, episode_floors
+from main_bench.leaderboard.episode.view import load_episode_view
+from main_bench.leaderboard.episode.visualize import episode_figure, episode_floors
 from main_bench.scenes.builtin import ensure_builtin_scenes
 from main_bench.stats.report import StatsSettings, compute_stats
 

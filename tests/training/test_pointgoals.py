@@ -9,7 +9,7 @@ import pytest
 
 from main_bench.episodes.dataset import load_episodes, load_navmesh, read_manifest
 from main_bench.episodes.goals import decode_cells, point_region, region_field
-from main_bench.episodes.validate import validate_dataset
+from main_bench.episodes.validation.validate import validate_dataset
 from main_bench.training.pointgoals import point_goal_dataset
 
 pytestmark = pytest.mark.slow

@@ -15,7 +15,7 @@ import secrets
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError
+from ...errors import InputError
 
 #: Fewest random bytes a hex secret must hold.
 MIN_SECRET_BYTES = 32

@@ -12,8 +12,8 @@ from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
-from ..errors import InputError, MainBenchError
-from ..worker_threads import fork_is_safe, single_threaded_children
+from ...errors import InputError, MainBenchError
+from ...worker_threads import fork_is_safe, single_threaded_children
 
 Unit = Callable[[dict[str, Any]], list[dict[str, Any]]]
 

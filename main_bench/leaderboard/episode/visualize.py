@@ -20,7 +20,7 @@ from matplotlib import colors as mcolors  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Circle, Patch  # noqa: E402
 
-from .episode_view import EpisodeView  # noqa: E402
+from .view import EpisodeView  # noqa: E402
 
 START_YELLOW = "#ffd400"
 TARGET_RED = "#e00000"
@@ -114,7 +114,7 @@ def _flag(ax, x: float, y: float, size: float, label: str | None = None) -> None
 
 def _region_cells(view: EpisodeView, k: int, floor: int | None) -> np.ndarray | None:
     """Cell indices of target k's stored success region (on `floor`), or None without a navmesh or region."""
-    from ..episodes.goals import decode_cells
+    from ...episodes.goals import decode_cells
 
     nav, regions = view.navmesh, view.episode.target_regions
     if nav is None or k >= len(regions) or len(regions[k]) == 0:

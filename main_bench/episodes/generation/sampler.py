@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .settings import GenerationSettings
-from .targets import Target, TargetBank
+from ..settings import GenerationSettings
+from ..targets import Target, TargetBank
 
 #: A target whose first this many candidate starts all fail the checks is given up.
 DEAD_AFTER = 4096

@@ -15,8 +15,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from PIL import Image  # noqa: E402
 
-from ..errors import InputError  # noqa: E402
-from .episode_view import EpisodeView  # noqa: E402
+from ...errors import InputError  # noqa: E402
+from .view import EpisodeView  # noqa: E402
 from .visualize import agent_colors, draw_background, draw_failures, draw_walked, episode_title  # noqa: E402
 
 
@@ -43,7 +43,7 @@ def poses_at(view: EpisodeView, step: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _camera(rules: Mapping[str, Any]):
-    from ..sim.settings import CameraSettings
+    from ...sim.settings import CameraSettings
 
     cam = rules.get("camera") or {}
     keys = ("width", "height", "hfov_deg", "height_m", "max_depth")
@@ -51,7 +51,7 @@ def _camera(rules: Mapping[str, Any]):
 
 
 def _renderer(view: EpisodeView, kind: str):
-    from ..sim.render.base import make_renderer
+    from ...sim.render.base import make_renderer
 
     if view.scene is None:
         raise InputError(f"--format gif renders the agents' views and needs the episode's scene ({view.map_reason}); "

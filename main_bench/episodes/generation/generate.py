@@ -15,11 +15,11 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from ..errors import DatasetError, InputError, NavMeshError
-from ..io import atomic_write_json, folder_lock, read_json, sha256_file
-from .manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, folder_in_use, identity
+from ...errors import DatasetError, InputError, NavMeshError
+from ...io import atomic_write_json, folder_lock, read_json, sha256_file
+from ..manifest import LOCK_NAME, MANIFEST_NAME, build_manifest, folder_in_use, identity
+from ..settings import GenerationSettings
 from .plan import Shard, group_units, plan_shards
-from .settings import GenerationSettings
 from .sources import SceneSource
 
 Executor = Literal["local", "ray"]
@@ -123,8 +123,8 @@ def navmesh_entry(out: Path, scene_id: str, with_hash: bool = False) -> dict[str
 
 
 def _build_navmesh(spec: dict[str, Any]) -> Any:
-    from ..navmesh import NavMesh, NavMeshSettings
-    from ..scenes.cache import load_scene_geometry
+    from ...navmesh import NavMesh, NavMeshSettings
+    from ...scenes.cache import load_scene_geometry
 
     nav_settings = NavMeshSettings.from_json(spec["navmesh_settings"])
     scene = load_scene_geometry(_scene_path(spec), up=spec["up"])
@@ -154,7 +154,7 @@ def _stored_navmesh(spec: dict[str, Any], built: tuple[Any, Any]) -> Any:
     import os
     import tempfile
 
-    from ..navmesh import NavMesh
+    from ...navmesh import NavMesh
 
     path = Path(spec["out"]) / navmesh_entry(Path(spec["out"]), spec["scene_id"])["path"]
     if not path.is_file():
@@ -173,10 +173,10 @@ def _stored_navmesh(spec: dict[str, Any], built: tuple[Any, Any]) -> Any:
 
 
 def _sample_shards(spec: dict[str, Any], todo: list[Shard]) -> dict[str, dict]:
-    from ..navmesh import NavMeshSettings
+    from ...navmesh import NavMeshSettings
+    from ..targets import TargetBank
     from .sampler import sample_episodes
     from .shards import batch_table, write_shard
-    from .targets import TargetBank
 
     settings = GenerationSettings.from_json(spec["settings"])
     nav_settings = NavMeshSettings.from_json(spec["navmesh_settings"])
@@ -200,7 +200,7 @@ def _scene_path(spec: dict[str, Any]) -> Path:
     the node's default cache (the content hash check then proves it is the same house)."""
     path = Path(spec["scene_path"])
     if not path.is_file() and spec.get("source") == "builtin":
-        from ..scenes import builtin
+        from ...scenes import builtin
 
         path = Path(builtin.ensure_builtin_scenes([spec["scene_id"]], builtin.default_cache_dir())[spec["scene_id"]])
     return path

@@ -12,11 +12,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..episodes.schema import Episode
-from ..errors import DatasetError, MainBenchError, ResultsError
-from ..evaluation.output.records import TEAM
-from ..evaluation.output.results import Results, load_results
-from ..suggest import did_you_mean
+from ...episodes.schema import Episode
+from ...errors import DatasetError, MainBenchError, ResultsError
+from ...evaluation.output.records import TEAM
+from ...evaluation.output.results import Results, load_results
+from ...suggest import did_you_mean
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,7 +70,7 @@ def dataset_path(results: Results) -> Path:
 
 
 def _find_episode(dataset: Path, results: Results, episode_id: str) -> Episode:
-    from ..episodes.dataset import load_episodes
+    from ...episodes.dataset import load_episodes
 
     rows = results.records[results.records["episode_id"] == episode_id]
     if rows.empty:
@@ -91,7 +91,7 @@ def _find_episode(dataset: Path, results: Results, episode_id: str) -> Episode:
 
 def _shortest(scene: Any, navmesh: Any, dataset: Path, ep: Episode, i: int) -> np.ndarray | None:
     """Agent i's shortest path to its target's stored success region (on the data set's stored navmesh)."""
-    from ..episodes.goals import decode_cells, region_field
+    from ...episodes.goals import decode_cells, region_field
 
     start = ep.start_positions[i]
     try:
@@ -128,7 +128,7 @@ def load_episode_view(results_dir: str | Path, episode_id: str, *, cache_dir: st
     note = "no map"
     reason = "map and shortest paths off"
     if with_scene:
-        from ..stats.maps import scene_and_navmesh
+        from ...stats.maps import scene_and_navmesh
 
         try:
             scene, navmesh = scene_and_navmesh(dataset, ep.scene_id, cache_dir)

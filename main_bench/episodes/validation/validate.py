@@ -16,12 +16,12 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-from ..errors import InputError
-from ..io import sha256_file
-from ..task_rules import rules_json
-from .manifest import Manifest, ShardEntry, read_manifest
-from .schema import EPISODES_SCHEMA_VERSION, ROW_SCHEMA
-from .validation_report import ValidationReport
+from ...errors import InputError
+from ...io import sha256_file
+from ...task_rules import rules_json
+from ..manifest import Manifest, ShardEntry, read_manifest
+from ..schema import EPISODES_SCHEMA_VERSION, ROW_SCHEMA
+from .report import ValidationReport
 
 #: Slack on stored float32 values against float64 bounds (metres).
 VALUE_TOL = 1e-3

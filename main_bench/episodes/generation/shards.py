@@ -13,11 +13,11 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..errors import DatasetError
-from ..io import atomic_path
-from .goals import encode_cells
+from ...errors import DatasetError
+from ...io import atomic_path
+from ..goals import encode_cells
+from ..schema import ROW_SCHEMA
 from .sampler import EpisodeBatch
-from .schema import ROW_SCHEMA
 
 #: Most rows in one Parquet row group (filterable with predicate push-down).
 ROW_GROUP_SIZE = 50_000

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .episode_view import EpisodeView
+from .view import EpisodeView
 
 ADDRESSED_BLACK = "#1f2328"
 

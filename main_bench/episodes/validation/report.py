@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..task_rules import describe_rules
+from ...task_rules import describe_rules
 
 
 @dataclass

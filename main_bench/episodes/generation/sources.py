@@ -7,9 +7,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from ..scenes.loader import SCENE_SUFFIXES, scene_content_hash
-from ..scenes.naming import scene_id_of
+from ...errors import InputError
+from ...scenes.loader import SCENE_SUFFIXES, scene_content_hash
+from ...scenes.naming import scene_id_of
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ def _load_split_file(path: Path | None) -> tuple[dict[str, str] | None, Any]:
     """({scene_id: split} of the listed ids, the SplitFile itself for its id ranges) or (None, None)."""
     if path is None:
         return None, None
-    from ..scenes import builtin
+    from ...scenes import builtin
 
     split_file = builtin.load_split_file(path)
     return split_map(split_file), split_file
@@ -60,7 +60,7 @@ def _load_split_file(path: Path | None) -> tuple[dict[str, str] | None, Any]:
 def find_scene_files(folder: Path) -> list[Path]:
     """Scene files of a folder: those directly in it, else those in its subfolders (Habitat's layouts, e.g.
     `mp3d/<scan>/<scan>.glb`, `hm3d/val/<NNNNN>-<id>/<id>.basis.glb`); semantic meshes are not scenes."""
-    from ..scenes.naming import is_auxiliary_mesh
+    from ...scenes.naming import is_auxiliary_mesh
 
     def keep(f: Path) -> bool:
         return f.suffix.lower() in SCENE_SUFFIXES and f.is_file() and not is_auxiliary_mesh(f)
@@ -81,7 +81,7 @@ def resolve_sources(scenes: Sequence[str], *, splits_file: Path | None = None, s
         raise InputError("no scenes given; pass --scenes builtin, a folder, or scene files")
     mapping, split_file = _load_split_file(splits_file)
     if list(scenes) == ["builtin"]:
-        from ..scenes import builtin
+        from ...scenes import builtin
 
         if mapping is None:
             mapping = split_map(builtin.builtin_split())

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .schema import TASKS
-from .settings import GenerationSettings
+from ..schema import TASKS
+from ..settings import GenerationSettings
 
 #: Most episodes one work unit samples (a unit loads its scene and navmesh once and shares target fields).
 UNIT_EPISODES = 200_000

@@ -14,14 +14,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pyarrow as pa
 
-from ..errors import DatasetError
-from ..parquet_read import read_parquet
-from .goals import decode_cells, object_region, region_field, scene_triangles
-from .plan import stable_id
+from ...errors import DatasetError
+from ...parquet_read import read_parquet
+from ..generation.plan import stable_id
+from ..goals import decode_cells, object_region, region_field, scene_triangles
 
 if TYPE_CHECKING:
-    from .manifest import Manifest, ShardEntry
-    from .validation_report import ValidationReport
+    from ..manifest import Manifest, ShardEntry
+    from .report import ValidationReport
 
 #: Largest |recomputed - stored| l_i accepted (metres).
 RECHECK_TOLERANCE = 1e-4
@@ -43,8 +43,8 @@ def recheck_distances(manifest: Manifest, shards: list[tuple[ShardEntry, int]], 
 
     `cache_dir`: the cache root the built-in houses are generated into (None: the default cache).
     """
-    from ..scenes import builtin, load_scene
-    from .dataset import load_navmesh, resolve_scene
+    from ...scenes import builtin, load_scene
+    from ..dataset import load_navmesh, resolve_scene
 
     sizes = [rows for _, rows in shards]
     picked = _pick(sum(sizes), sample, manifest.seed)
