@@ -103,8 +103,10 @@ def test_sigkill_of_evaluate_leaves_no_process_and_resuming_gives_the_same_recor
         deadline = time.monotonic() + 180
         while time.monotonic() < deadline and proc.poll() is None:
             run = _descendants(proc.pid)
-            # two policy processes (one per worker) and the daemon each left: four policy_child interpreters
-            if sum("policy_child" in _cmdline(pid) for pid in run) >= 4:
+            # two policy processes (one per worker) and the daemon each left: four policy_child interpreters; and
+            # the folder claimed (run.json is written under the folder's lock), since workers fork and start their
+            # policies before the command has planned and taken the folder
+            if sum("policy_child" in _cmdline(pid) for pid in run) >= 4 and (out / "run.json").is_file():
                 break
             time.sleep(0.05)
         assert proc.poll() is None, "the run ended before it could be killed"
