@@ -7,9 +7,9 @@
 
 `train` runs one `main-bench train run` at a time (each resumes from its checkpoint, so stopping loses at most
 the updates since it); with `--max-minutes` it stops starting runs after M minutes and gives the running one the
-time left. Every command takes `--comm` (default comm-rm): the communicating variant that gets seeds and teams
-of 3 beside IPPO; give the best of the four once they are scored, to every command alike. Bad input: one line on
-stderr, exit 2.
+time left. Every command takes `--comm` (default comm-rv, the best of the four on team SPL with teams of 2): the
+communicating variant that gets seeds and teams of 3 beside IPPO, given to every command alike. Bad input: one line
+on stderr, exit 2.
 """
 
 from __future__ import annotations

@@ -4,10 +4,10 @@ published board (`leaderboard/table2/`) with Fig. 5's curves.
 Every run trains with `train run`'s defaults (the small configuration: gps track, point goals, 64 x 64 depth,
 B = 8, 64-step rollouts) on the same data and the same agent-step budget, and is scored with `evaluate` on the
 same val split with the mode and track its submission records. The seven algorithms train with teams of 2 on
-seed 0; IPPO and `comm` (the communicating variant compared with it, Comm-RM by default, the paper's best)
-also train with teams of 3, and on seeds 1 and 2. Runs are resumable (`train run` resumes from its
-checkpoint), so the campaign can stop and go on in later sittings: `python tools/table2.py train` trains what
-is not finished, `evaluate` scores what is trained, `publish` writes the board.
+seed 0; IPPO and `comm` (the communicating variant compared with it: by default Comm-RV, the best of the four
+on team SPL with teams of 2) also train with teams of 3, and on seeds 1 and 2. Runs are resumable (`train run`
+resumes from its checkpoint), so the campaign can stop and go on in later sittings: `python tools/table2.py
+train` trains what is not finished, `evaluate` scores what is trained, `publish` writes the board.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ class Campaign:
     episodes: str = "data/sample-points"
     root: str = "runs/table2"
     agent_steps: int = 1_500_000
-    comm: str = "comm-rm"
+    comm: str = "comm-rv"
     seeds: tuple[int, ...] = (0, 1, 2)
     train_split: str = "train"
     eval_split: str = "val"
