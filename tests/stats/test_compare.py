@@ -46,18 +46,38 @@ def test_plotted_scene_means_are_the_sample_per_scene_means(written):
 def test_every_published_value_carries_its_source(written):
     entry, table = written
     published = table[table["dataset"] != THIS]
-    assert len(published) == len(PUBLISHED_LENGTHS) >= 1
+    figures = published[published["kind"] != "scene_mean"]
+    assert len(figures) == len(PUBLISHED_LENGTHS) >= 1
+    assert list(figures["dataset"]) == [p.dataset for p in PUBLISHED_LENGTHS]
     for _, row in published.iterrows():
-        assert row["kind"] in KINDS
+        assert row["kind"] in KINDS or row["kind"] == "scene_mean"
         assert isinstance(row["source"], str) and len(row["source"]) > 20
         assert isinstance(row["where"], str) and row["where"]
         assert isinstance(row["url"], str) and row["url"].startswith("https://")
-        if row["kind"] == "range":
+        if row["kind"] in ("range", "episode_files"):
             assert 0 < row["low_m"] < row["high_m"]
-        else:
+        if row["kind"] != "range":
             assert row["value_m"] > 0
         assert row["url"] in entry.caption
     for p in PUBLISHED_LENGTHS:
         assert p.source and p.where and p.url.startswith("https://")
     for m in NOT_FOUND:
         assert m.dataset in entry.caption and m.dataset not in set(table["dataset"])
+
+
+def test_figures_from_published_episode_files_are_drawn_per_scene(written):
+    """ObjectNav's published val_mini episodes: every scene mean is a row of its own, inside the files' range,
+    with its episode count; the figure's row holds the median of all of them; the caption gives the means."""
+    entry, table = written
+    from_files = [p for p in PUBLISHED_LENGTHS if p.kind == "episode_files"]
+    assert len(from_files) == 3 and all("ObjectNav" in p.dataset for p in from_files)
+    for p in from_files:
+        assert p.scene_means and p.low_m <= p.value_m <= p.high_m
+        scenes = table[(table["dataset"] == p.dataset) & (table["kind"] == "scene_mean")].set_index("item")
+        assert sorted(scenes.index) == sorted(s for s, _, _ in p.scene_means)
+        for scene, n, mean in p.scene_means:
+            assert p.low_m < mean < p.high_m
+            assert scenes.loc[scene, "value_m"] == pytest.approx(mean) and scenes.loc[scene, "episodes"] == n
+            assert f"{scene} {mean:g} m ({n} episodes)" in entry.caption
+        row = table[(table["dataset"] == p.dataset) & (table["kind"] == "episode_files")].iloc[0]
+        assert row["episodes"] == p.episodes() == sum(n for _, n, _ in p.scene_means)
