@@ -52,11 +52,12 @@ class Campaign:
 
     def cells(self) -> list[Cell]:
         """Every run, in training order: all seven at 2 agents (seed 0), IPPO and `comm` at 3 agents (seed 0),
-        then their other seeds at 2 and at 3 agents; so the board has a row for every algorithm and team size
-        before the seeds' spread."""
+        then their other seeds at 2 and then at 3 agents, IPPO and `comm` in turn on each seed; so the board has a
+        row for every algorithm and team size before the seeds' spread, and both of the pair gain each seed
+        together."""
         pair = ("ippo", self.comm)
         out = [Cell(a, 2, 0) for a in ALGOS] + [Cell(a, 3, 0) for a in pair]
-        out += [Cell(a, n, s) for n in (2, 3) for a in pair for s in self.seeds[1:]]
+        out += [Cell(a, n, s) for n in (2, 3) for s in self.seeds[1:] for a in pair]
         return out
 
     def updates(self, cell: Cell) -> int:

@@ -27,6 +27,9 @@ def test_cells_budgets_and_commands():
     assert len({x.name for x in cells}) == len(cells)
     # every algorithm and team size of the board before any second seed
     assert [x.seed for x in cells[:9]] == [0] * 9 and {x.agents for x in cells[7:9]} == {3}
+    # then IPPO and the variant in turn, seed by seed, teams of 2 before teams of 3
+    assert [x.name for x in cells[9:13]] == ["ippo-n2-s1", "comm-v-n2-s1", "ippo-n2-s2", "comm-v-n2-s2"]
+    assert [x.agents for x in cells[9:]] == [2] * 4 + [3] * 4
     for cell in cells:  # the same agent-step budget whatever the team size
         assert c.updates(cell) * ROLLOUT * ENVS * cell.agents >= c.agent_steps
         assert (c.updates(cell) - 1) * ROLLOUT * ENVS * cell.agents < c.agent_steps
