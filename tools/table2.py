@@ -47,7 +47,8 @@ def _scored(campaign: Campaign, name: str) -> bool:
 def status(campaign: Campaign) -> None:
     for cell in campaign.cells():
         done, total = campaign.trained(cell), campaign.updates(cell)
-        print(f"{cell.name:18s} {done:5d}/{total} updates  {'finished' if campaign.finished(cell) else 'training'}"
+        state = "finished" if campaign.finished(cell) else ("in progress" if done else "not started")
+        print(f"{cell.name:18s} {done:5d}/{total} updates  {state}"
               f"  {'scored' if _scored(campaign, cell.name) else 'not scored'}")
 
 

@@ -49,6 +49,7 @@ def test_table2_tool_takes_the_communicating_variant_to_seed(tmp_path):
     assert shown.returncode == 0, shown.stderr
     names = [line.split()[0] for line in shown.stdout.splitlines()]
     assert "comm-v-n3-s0" in names and "comm-v-n2-s2" in names and "comm-rv-n3-s0" not in names
+    assert all(re.search(r" 0/\d+ updates  not started  not scored$", line) for line in shown.stdout.splitlines())
     assert "comm-rv-n3-s0" in [line.split()[0] for line in status().stdout.splitlines()]
     refused = status("--comm", "ippo")
     assert refused.returncode == 2 and "--comm" in refused.stderr
