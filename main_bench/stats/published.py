@@ -104,7 +104,7 @@ PUBLISHED_LENGTHS: tuple[PublishedLength, ...] = (
 NOT_FOUND: tuple[MissingFigure, ...] = (
     MissingFigure("Habitat ObjectNav, full val and train splits (Matterport3D v1, HM3D v1 and v2)",
                   "a published mean, median or range of the start-to-goal geodesic distance over a whole split "
-                  "(ObjectNav Revisited, arXiv 2006.13171; the HM3D and HM3D-Semantics papers' openings; "
-                  "aihabitat.org/challenge/2020 to /2023; the habitat-challenge README); the split files "
+                  "(ObjectNav Revisited, arXiv 2006.13171; the stored openings of the HM3D and HM3D-Semantics "
+                  "papers; aihabitat.org/challenge/2020 to /2023; the habitat-challenge README); the split files "
                   "themselves were not reachable"),
 )
