@@ -86,7 +86,8 @@ def episode_length_vs_published(frame: pd.DataFrame, published: tuple[PublishedL
     labels += [f"[{k + 1}] {p.dataset}: {p.quantity}" for k, p in enumerate(published)]
     labels = [textwrap.fill(t, 34) for t in labels]
     fig, ax = plt.subplots(figsize=(9.0, 1.8 + 1.0 * len(labels)))
-    ours = table[(table["kind"] == "scene_mean") & (table["dataset"] == THIS)]
+    scenes = table[table["kind"] == "scene_mean"]
+    ours = scenes[scenes["dataset"] == THIS]
     ax.scatter(ours["value_m"], np.zeros(len(ours)), color="#4c72b0", zorder=3,
                label=f"scene mean ({len(ours)} scenes)")
     ax.plot([ours["value_m"].mean()] * 2, [-0.25, 0.25], color="#4c72b0", linewidth=2, label="mean over scenes")
@@ -99,8 +100,9 @@ def episode_length_vs_published(frame: pd.DataFrame, published: tuple[PublishedL
                         fmt="none", ecolor=color, capsize=6, linewidth=2)
         if pd.notna(row["value_m"]):
             ax.plot([row["value_m"]], [y], marker="D", color=color, linestyle="none")
-        theirs = table[(table["kind"] == "scene_mean") & (table["dataset"] == row["dataset"]) & (row["dataset"] != THIS)]
-        ax.scatter(theirs["value_m"], np.full(len(theirs), y - 0.2), color=color, zorder=3, s=18)
+        if row["dataset"] != THIS:
+            theirs = scenes[scenes["dataset"] == row["dataset"]]
+            ax.scatter(theirs["value_m"], np.full(len(theirs), y - 0.2), color=color, zorder=3, s=18)
     ax.set_yticks(range(len(labels)), labels, fontsize=8)
     ax.set_xlabel("geodesic distance (m); bars: min-max or published range; diamond: median; "
                   "dots: mean per scene", fontsize=9)
