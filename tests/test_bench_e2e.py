@@ -27,7 +27,7 @@ def test_the_warm_part_runs_its_commands_in_a_server_it_stops(tmp_path, monkeypa
     monkeypatch.setenv("MAIN_BENCH_CACHE", str(tmp_path / "cache"))
     with e2e.warm_server() as env:
         assert env["MAIN_BENCH_WARM"] == "1"
-        sock = Path(subprocess.run([sys.executable, "-m", "main_bench.cli.warm", "--socket"], env=env,
+        sock = Path(subprocess.run([sys.executable, "-m", "main_bench.cli.processes.warm", "--socket"], env=env,
                                    capture_output=True, text=True, check=True).stdout.strip())
         assert sock.exists()
         row = e2e.evaluate_scaling(tmp_path, ("oracle",), 1, 4, 1, env)["oracle"]

@@ -1,5 +1,5 @@
-"""The warm command server (`main_bench.cli.warm`, MAIN_BENCH_WARM=1): commands run in a forked child of a server
-with the same output, files and exit codes as on their own; the server follows the code and the environment, and
+"""The warm command server (`main_bench.cli.processes.warm`, MAIN_BENCH_WARM=1): commands run in a forked child of a
+server with the same output, files and exit codes as on their own; the server follows the code and the environment, and
 exits when idle or when its socket file goes."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from main_bench.cli.warm import server_key
+from main_bench.cli.processes.warm import server_key
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "episodes" / "sample"
@@ -31,8 +31,8 @@ def _wait_for(check, seconds: float, what: str):
 
 
 def _socket_of(env: dict[str, str]) -> Path:
-    """The socket a command run from ROOT with `env` looks for (`python -m main_bench.cli.warm --socket`)."""
-    return Path(subprocess.run([sys.executable, "-m", "main_bench.cli.warm", "--socket"], env=env, cwd=ROOT,
+    """The socket a command run from ROOT with `env` looks for (`python -m main_bench.cli.processes.warm --socket`)."""
+    return Path(subprocess.run([sys.executable, "-m", "main_bench.cli.processes.warm", "--socket"], env=env, cwd=ROOT,
                                capture_output=True, text=True, check=True).stdout.strip())
 
 
@@ -76,6 +76,14 @@ def test_the_key_follows_the_code_and_the_environment_but_not_the_folder(tmp_pat
     assert key2 != key
     os.utime(package / "b.py", ns=(0, 0))
     assert server_key(package, env) != key2
+
+
+def test_the_default_key_covers_the_whole_toolkit():
+    """Without `package`, the key covers every file of `main_bench`, not only the folder the client lives in."""
+    import main_bench
+
+    env = {"HOME": "/home/u"}
+    assert server_key(None, env) == server_key(Path(main_bench.__file__).resolve().parent, env)
 
 
 def test_the_key_follows_installed_packages_but_not_files_in_the_working_folder(tmp_path, monkeypatch):
@@ -177,7 +185,7 @@ def test_a_stale_socket_is_replaced_and_an_idle_server_exits(tmp_path):
     stale.close()  # the file stays, nobody listens
     log = tmp_path / "server.log"
     with open(log, "wb") as out:
-        server = subprocess.Popen([sys.executable, "-m", "main_bench.cli.warm_server", str(path), json.dumps(sys.path), "2"],
+        server = subprocess.Popen([sys.executable, "-m", "main_bench.cli.processes.warm_server", str(path), json.dumps(sys.path), "2"],
                                   stdout=out, stderr=out, cwd=ROOT)
     try:
         _wait_for(lambda: "listening on" in log.read_text(), 120, "the server to listen")

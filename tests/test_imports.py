@@ -197,6 +197,16 @@ def test_the_checks_fail_on_a_synthetic_package(tmp_path: Path) -> None:
         stage_of("other.module", stages)
 
 
+def test_no_folder_holds_more_than_fifteen_modules() -> None:
+    """A folder past about 15 files splits by idea (the project's layout rule)."""
+    counts: dict[str, int] = {}
+    for path in ROOT.rglob("*.py"):
+        folder = str(path.parent.relative_to(ROOT.parent))
+        counts[folder] = counts.get(folder, 0) + 1
+    crowded = {folder: n for folder, n in sorted(counts.items()) if n > 15}
+    assert not crowded, f"folders with more than 15 modules (split them by idea): {crowded}"
+
+
 def test_the_architecture_page_names_every_module() -> None:
     page = (ROOT.parent / "docs" / "architecture.md").read_text()
     missing = [str(path.relative_to(ROOT)) for path in sorted(ROOT.rglob("*.py"))

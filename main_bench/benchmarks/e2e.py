@@ -10,7 +10,7 @@
   actions (short episodes: an agent soon calls `found`), interleaved, after a warm-up that starts every episode
   once (a long training run's steady state: every simulator and target field made); reset times within a scene
   and when switching back to a scene seen before;
-- warm: the first episode in a warm command server (`cli.warm`, MAIN_BENCH_WARM=1: commands forked from a
+- warm: the first episode in a warm command server (`cli.processes.warm`, MAIN_BENCH_WARM=1: commands forked from a
   process that has imported the toolkit and loaded its kernels), which this benchmark starts before and stops
   after; and (full run) the oracle's 1- and 2-worker evaluations on their own and warm, interleaved
   (`warm_scaling`);
@@ -160,10 +160,10 @@ def compiles() -> dict[str, Any]:
 
 @contextlib.contextmanager
 def warm_server() -> Iterator[dict[str, str]]:
-    """The environment of commands that run in a warm server (`cli.warm`, MAIN_BENCH_WARM=1): one is started
+    """The environment of commands that run in a warm server (`cli.processes.warm`, MAIN_BENCH_WARM=1): one is started
     (or found) and ready before the block, and stopped after it (its socket file removed)."""
     env = {**os.environ, "MAIN_BENCH_WARM": "1"}
-    sock = Path(subprocess.run([sys.executable, "-m", "main_bench.cli.warm", "--socket"], env=env, check=True,
+    sock = Path(subprocess.run([sys.executable, "-m", "main_bench.cli.processes.warm", "--socket"], env=env, check=True,
                                capture_output=True, text=True).stdout.strip())
     _timed([*_cli(), "--help"], env)  # starts it when none answers
     deadline = time.monotonic() + 120

@@ -162,7 +162,7 @@ class Scheduler:
     def _child(self, sub: Submission, args: list[str], log: Path, timeout: float | None) -> tuple[int, str, str]:
         """Run `main-bench args` in a job process of its own group; (exit code, stdout, stderr), both capped
         and kept in `log`.out/.err."""
-        cmd = [sys.executable, "-m", "main_bench.cli.job", "--parent", str(os.getpid())]
+        cmd = [sys.executable, "-m", "main_bench.cli.processes.job", "--parent", str(os.getpid())]
         cmd += ["--ray", self.settings.ray_address] if self.settings.ray_address and args[1] != "check-agent" else []
         log.parent.mkdir(parents=True, exist_ok=True)
         proc = subprocess.Popen(cmd + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,

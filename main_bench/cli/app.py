@@ -13,7 +13,7 @@ import sys
 import typer
 
 from ..errors import MainBenchError
-from .warm import run_warm
+from .processes.warm import run_warm
 
 app = typer.Typer(
     name="main-bench",
@@ -161,7 +161,7 @@ def run() -> None:
     normally, with their traceback.
 
     With `MAIN_BENCH_WARM=1` the command runs in a warm server's forked process when one answers
-    (`cli.warm`), and this process only passes on its streams and exit code."""
+    (`cli.processes.warm`), and this process only passes on its streams and exit code."""
     code = run_warm(sys.argv[1:])
     if code is None:
         code = main()

@@ -9,10 +9,10 @@ client's own process.
 
 - `run_warm(args)`, called first by the console script, connects to the server of this installation and
   environment (`server_key`) and returns the command's exit code; with no server answering it starts one in
-  the background (`python -m main_bench.cli.warm_server`) and returns None, so that this command runs in its
+  the background (`python -m main_bench.cli.processes.warm_server`) and returns None, so that this command runs in its
   own process as usual.
 - `socket_path()`: where the server listens, in a folder only this user can open (peers of another user are
-  refused); `python -m main_bench.cli.warm --socket` prints it.
+  refused); `python -m main_bench.cli.processes.warm --socket` prints it.
 
 Signals the client gets (SIGINT, SIGTERM, SIGHUP) reach the command's process group; a client killed outright
 (SIGKILL) closes its connection, and the command's process group is then hung up (SIGHUP).
@@ -47,7 +47,7 @@ def server_key(package: Path | None = None, environ: dict[str, str] | None = Non
     `_IGNORED_VARIABLES`."""
     import hashlib
 
-    package = Path(__file__).resolve().parents[1] if package is None else Path(package)
+    package = Path(__file__).resolve().parents[2] if package is None else Path(package)
     environ = dict(os.environ) if environ is None else environ
     digest = hashlib.sha256()
     for path in sorted(package.rglob("*.py")):
@@ -73,7 +73,7 @@ def socket_path() -> Path:
     import hashlib
     import tempfile
 
-    from ..cache_root import cache_root
+    from ...cache_root import cache_root
 
     path = cache_root() / "warm" / f"{server_key()[:24]}.sock"
     if len(os.fsencode(path)) <= _MAX_SOCKET_PATH:
@@ -158,7 +158,7 @@ def _start_server(path: Path) -> None:
             pass
         os.close(os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
         with open(path.with_suffix(".log"), "wb") as log:
-            subprocess.Popen([sys.executable, "-m", "main_bench.cli.warm_server", os.fspath(path), json.dumps(sys.path)],
+            subprocess.Popen([sys.executable, "-m", "main_bench.cli.processes.warm_server", os.fspath(path), json.dumps(sys.path)],
                              stdin=subprocess.DEVNULL, stdout=log, stderr=log, start_new_session=True,
                              close_fds=True, cwd="/")
     except OSError:

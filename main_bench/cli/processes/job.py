@@ -1,4 +1,4 @@
-"""One evaluation of the challenge queue, in its own process: `python -m main_bench.cli.job [--ray ADDRESS]
+"""One evaluation of the challenge queue, in its own process: `python -m main_bench.cli.processes.job [--ray ADDRESS]
 ARGS...` runs `main-bench ARGS...` (the `evaluate` command, exactly as the CLI does) and exits with its code.
 
 The process dies with the server that started it (Linux parent-death signal), so a killed server leaves no
@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import sys
 
-from ..evaluation.process.lifetime import die_with_parent
+from ...evaluation.process.lifetime import die_with_parent
 
 
 def main(argv: list[str]) -> int:
@@ -21,14 +21,14 @@ def main(argv: list[str]) -> int:
         die_with_parent(int(args[1]))
         args = args[2:]
     if args[:1] != ["--ray"]:
-        from .app import main as cli_main
+        from ..app import main as cli_main
 
         return cli_main(args)
     import ray
 
     ray.init(address=args[1], include_dashboard=False, log_to_driver=False, configure_logging=False)
     try:
-        from .app import main as cli_main
+        from ..app import main as cli_main
 
         return cli_main(args[2:])
     finally:

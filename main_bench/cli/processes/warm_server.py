@@ -5,7 +5,7 @@
 environment and runs the command as the console script would (`app.main`, `app.wind_down`); exit after
 `idle_s` seconds without a request or once the socket file is removed or replaced. Each server's log is
 `<socket>.log` beside it: every command and its child's CPU time. Started by the client as
-`python -m main_bench.cli.warm_server SOCKET SYS_PATH_JSON [IDLE_S]`.
+`python -m main_bench.cli.processes.warm_server SOCKET SYS_PATH_JSON [IDLE_S]`.
 """
 
 from __future__ import annotations
@@ -29,17 +29,17 @@ def warm_up() -> None:
     import pandas  # noqa: F401
     import pyarrow.parquet  # noqa: F401
 
-    from ..evaluation.baselines import oracle  # noqa: F401
-    from ..evaluation.run import (  # noqa: F401
+    from ...evaluation.baselines import oracle  # noqa: F401
+    from ...evaluation.run import (  # noqa: F401
         executors,
         runner,  # noqa: F401
         worker,
     )
-    from ..navmesh import NavMesh
-    from ..scenes.loader import Scene
-    from ..scenes.procedural.box_mesh import boxes_to_arrays
-    from ..scenes.procedural.model import Box
-    from . import app  # noqa: F401
+    from ...navmesh import NavMesh
+    from ...scenes.loader import Scene
+    from ...scenes.procedural.box_mesh import boxes_to_arrays
+    from ...scenes.procedural.model import Box
+    from .. import app  # noqa: F401
 
     grey = (128, 128, 128, 255)
     vertices, faces, _colours = boxes_to_arrays((Box((0.0, 0.0, -0.1), (4.0, 3.0, 0.0), grey),  # a floor
@@ -189,7 +189,7 @@ def _run_child(conn: Any, request: dict[str, Any], fds: list[int]) -> None:
                                            buffering=1 if os.isatty(1) else -1)
         sys.stderr = sys.__stderr__ = open(2, "w", encoding=err_enc, errors=err_err,  # noqa: SIM115
                                            closefd=False, buffering=1)
-        from .app import main, wind_down
+        from ..app import main, wind_down
 
         code = main(sys.argv[1:])
         wind_down()
