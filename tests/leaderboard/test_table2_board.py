@@ -56,3 +56,47 @@ def test_every_run_names_its_command_and_commit_and_all_share_one_split(board):
     splits = {split for run in runs for split in run.loaded.records["split"].unique()}
     assert splits == {"val"}
     assert not list(BOARD.rglob("checkpoint.pt"))
+
+
+
+PAPER_PAGE = BOARD.parents[1] / "docs" / "paper.md"
+
+
+def _table(page: str, header: str) -> list[list[str]]:
+    """The body rows (lists of cells) of the Markdown table whose header row starts with `| {header} |`."""
+    lines = page.splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith(f"| {header} |"))
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append([cell.strip() for cell in line.strip().strip("|").split("|")])
+    return rows
+
+
+def test_the_paper_page_shows_the_boards_numbers():
+    """docs/paper.md's tables of teams of 2 and 3 and its run count show the board's cells: team success and SPL
+    with their intervals, each seed's team success, both sub-tasks' team success, the paired column."""
+    readme = (BOARD / "README.md").read_text()
+    paper = PAPER_PAGE.read_text()
+    done, total = re.search(r"Runs on this page: (\d+) of the campaign's (\d+)", readme).groups()
+    assert f"{done} of the {total} runs are trained and scored" in paper
+    # Algorithm | N | mode | seeds | episodes | Length | Distance | Success | SPL | team success W | team SPL |
+    # per seed | paired
+    main = {(r[0], int(r[1])): r for r in _table(readme, "Algorithm")}
+    by_task = {(r[0], int(r[1])): r[2:] for r in _table(readme, "Algorithm | N | team success, individual [95% CI]")}
+    for agents in (2, 3):
+        rows = _table(paper, f"algorithm, teams of {agents}")
+        assert sorted(r[0].lower() for r in rows) == sorted(a for a, n in main if n == agents), agents
+        for row in rows:
+            key = (row[0].lower(), agents)
+            cells = main[key]
+            if agents == 2:  # the column of each seed's team success
+                seeds, per_seed = cells[3].split(","), cells[11]
+                values = per_seed.split(", ") if per_seed != "–" else [cells[9].split(" ")[0]]
+                expected = "" if key[0] == "random" else "; ".join(f"{s}: {v}" for s, v in zip(seeds, values, strict=True))
+                assert row[1] == expected, key
+                row = row[1:]
+            individual, shared = by_task[key]
+            assert row[1:6] == [cells[9].split(" W[")[0], cells[10], shared, individual,
+                                cells[12].replace("] ", "], ")], key
