@@ -8,6 +8,7 @@ Flows in: a rollout's arrays, a curve row, this process's elapsed seconds and th
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -25,15 +26,22 @@ def found_rate(data: dict[str, np.ndarray]) -> float:
     return float(((np.asarray(data["actions"]) == FOUND) & alive).sum()) / steps
 
 
-def time_status(elapsed: float, max_minutes: float, updates_done: int, updates_left: int) -> str:
+def time_status(elapsed: float, max_minutes: float, updates_done: int, updates_left: int,
+                recent: Sequence[float] = ()) -> str:
     """Elapsed and remaining wall time of a run, e.g. `12:03 elapsed, 17:57 left of 30:00`.
 
     `elapsed`: seconds of this process; `max_minutes`: the `--max-minutes` limit (0: none); `updates_done`:
-    updates this process made in `elapsed`; `updates_left`: updates still to go before `--updates`. With a
-    limit, the time left is the limit's, unless the update budget ends sooner at the rate so far (then that
-    estimate, marked `about`); without one, the estimate from the update rate."""
+    updates this process made in `elapsed`; `updates_left`: updates still to go before `--updates`; `recent`:
+    the wall seconds of the last few updates, whose median sets the rate where given (so a process that was
+    paused, or slow to start, is not estimated by its average), else `elapsed / updates_done`. With a limit,
+    the time left is the limit's, unless the update budget ends sooner at that rate (then that estimate,
+    marked `about`); without one, the estimate from the update rate."""
     text = f"{clock(elapsed)} elapsed"
-    estimate = elapsed / updates_done * updates_left if updates_done > 0 else math.inf
+    if recent:
+        per_update = float(np.median(np.asarray(recent, dtype=float)))
+    else:
+        per_update = elapsed / updates_done if updates_done > 0 else math.inf
+    estimate = per_update * updates_left if updates_left > 0 else 0.0
     if max_minutes > 0:
         limit = max_minutes * 60.0
         if estimate < limit - elapsed:

@@ -32,6 +32,7 @@ from .storage import Rollout, StorageShape
 CHECKPOINT = "checkpoint.pt"
 CHECKPOINT_VERSION = 2
 WINDOW = 50  # episodes in the curve's moving averages
+RATE_WINDOW = 20  # updates whose median wall time sets the progress line's time left
 
 
 @dataclass(frozen=True)
@@ -167,6 +168,8 @@ class Trainer:
         # thread then, since threads waiting on each other stall when the cores are oversubscribed.
         collect_threads = 1 if s.backend != "inline" else update_threads
         first_update = self.update
+        recent: deque[float] = deque(maxlen=RATE_WINDOW)  # wall seconds of the last updates, for the time left
+        last = start
         try:
             arrays = sampler.reset()
             hidden = np.zeros((s.num_envs, s.agents, s.hidden), dtype=np.float32)
@@ -187,9 +190,12 @@ class Trainer:
                 if tb is not None:
                     for key, value in row.items():
                         tb.add_scalar(key, value, int(row["agent_steps"]))
+                now = time.perf_counter()
+                recent.append(now - last)
+                last = now
                 if self.progress:
-                    times = time_status(time.perf_counter() - start, s.max_minutes, self.update - first_update,
-                                        s.updates - self.update)
+                    times = time_status(now - start, s.max_minutes, self.update - first_update,
+                                        s.updates - self.update, recent)
                     self.progress(progress_line(row, s.updates, times))
                 if self.update % s.checkpoint_every == 0:
                     self.checkpoint(self.wall_before + time.perf_counter() - start)

@@ -43,3 +43,12 @@ def test_time_status_with_only_updates_is_an_estimate():
     assert time_status(120, 0, 4, 6) == "2:00 elapsed, about 3:00 left"
     assert time_status(5, 0, 0, 6) == "0:05 elapsed"  # no update yet: no rate to estimate from
     assert time_status(50, 0, 5, 0) == "0:50 elapsed, about 0:00 left"
+
+
+def test_time_status_takes_its_rate_from_the_recent_updates_when_given():
+    # 10 updates in 600 s, but one of them took 500 s (the process was paused): the median of the recent
+    # updates (10 s each) sets the rate, not the average (60 s)
+    recent = [10.0] * 9 + [500.0]
+    assert time_status(600, 0, 10, 30, recent) == "10:00 elapsed, about 5:00 left"
+    assert time_status(600, 0, 10, 30) == "10:00 elapsed, about 30:00 left"
+    assert time_status(600, 60, 10, 30, recent) == "10:00 elapsed, about 5:00 left (30 updates, within the 1:00:00 limit)"
