@@ -169,7 +169,6 @@ class Trainer:
         collect_threads = 1 if s.backend != "inline" else update_threads
         first_update = self.update
         recent: deque[float] = deque(maxlen=RATE_WINDOW)  # wall seconds of the last updates, for the time left
-        last = start
         try:
             arrays = sampler.reset()
             hidden = np.zeros((s.num_envs, s.agents, s.hidden), dtype=np.float32)
@@ -185,16 +184,15 @@ class Trainer:
                 timing["update"] += time.perf_counter() - t0
                 losses.append(loss)
                 self.update += 1
+                previous_tick = self._tick  # the end of the last update (`_curve_row` moves it to now)
                 row = self._curve_row(ended, time.perf_counter() - start, loss, found)
+                recent.append(self._tick - previous_tick)
                 self.curve.append(row)
                 if tb is not None:
                     for key, value in row.items():
                         tb.add_scalar(key, value, int(row["agent_steps"]))
-                now = time.perf_counter()
-                recent.append(now - last)
-                last = now
                 if self.progress:
-                    times = time_status(now - start, s.max_minutes, self.update - first_update,
+                    times = time_status(time.perf_counter() - start, s.max_minutes, self.update - first_update,
                                         s.updates - self.update, recent)
                     self.progress(progress_line(row, s.updates, times))
                 if self.update % s.checkpoint_every == 0:

@@ -58,7 +58,6 @@ def test_every_run_names_its_command_and_commit_and_all_share_one_split(board):
     assert not list(BOARD.rglob("checkpoint.pt"))
 
 
-
 PAPER_PAGE = BOARD.parents[1] / "docs" / "paper.md"
 
 
