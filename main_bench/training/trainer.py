@@ -192,7 +192,7 @@ class Trainer:
                     for key, value in row.items():
                         tb.add_scalar(key, value, int(row["agent_steps"]))
                 if self.progress:
-                    times = time_status(time.perf_counter() - start, s.max_minutes, self.update - first_update,
+                    times = time_status(self._tick - start, s.max_minutes, self.update - first_update,
                                         s.updates - self.update, recent)
                     self.progress(progress_line(row, s.updates, times))
                 if self.update % s.checkpoint_every == 0:
